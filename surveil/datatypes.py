@@ -1,0 +1,210 @@
+"""Data passed between stages and to output files.
+
+Conventions (repeated in docstrings where they matter):
+
+- SI units inside maths: metres, seconds, radians; names carry units (``_m``, ``_s``, ``_px``,
+  ``_deg``, ``_ns``). Timestamps that cross a stage or reach a file are integer nanoseconds on
+  the recording clock (``_ns``). Hue is in degrees ``[0, 360)``.
+- World frame: right-handed, Z up, floor at Z = 0. Camera frames as OpenCV (x right, y down,
+  z forward). Transforms are named ``a_from_b``.
+- Images are indexed ``[row, col]``, uint8 BGR as OpenCV delivers them; pixel coordinates are
+  ``(u, v) = (col, row)`` floats. Masks are ``bool``.
+- Struct-of-arrays: one array per attribute. "Nothing found" is an empty array of the right
+  shape, never ``None``.
+"""
+
+from __future__ import annotations
+
+import enum
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from surveil.validate import readonly, require_shape
+
+
+class Limb(enum.IntEnum):
+    """Limb type of a target; the integer is the ``limb`` field of ``/targets/points``."""
+
+    HEAD = 0
+    LEFT_HAND = 1
+    RIGHT_HAND = 2
+    UNKNOWN = 255
+
+    @property
+    def key(self) -> str:
+        """The label suffix: ``head``, ``left_hand``, ``right_hand`` (``unknown`` otherwise)."""
+        return self.name.lower()
+
+    @property
+    def is_hand(self) -> bool:
+        return self in (Limb.LEFT_HAND, Limb.RIGHT_HAND)
+
+    @classmethod
+    def from_key(cls, key: str) -> Limb:
+        try:
+            return cls[key.upper()]
+        except KeyError:
+            raise ValueError(f"unknown limb {key!r}; expected head, left_hand or right_hand"
+                             ) from None
+
+
+class Phase(enum.Enum):
+    """Tracker state (paper 004 Fig. 1). ``code`` is the ``state`` field of
+    ``/targets/points``; uninitialised trackers are never written."""
+
+    UNINITIALISED = "uninitialised"
+    UNLABELLED = "unlabelled"
+    NORMAL = "normal"
+    COMBINED = "combined"
+    LOST = "lost"
+
+    @property
+    def code(self) -> int:
+        return {"unlabelled": 0, "normal": 1, "combined": 2, "lost": 3}.get(self.value, 255)
+
+
+LABEL_RE = re.compile(r"^(?:p(?P<person>[1-9][0-9]*)/(?P<limb>head|left_hand|right_hand)"
+                      r"|t(?P<tracker>[0-9]+))$")
+
+
+def make_label(person: int, limb: Limb, tracker_id: int) -> str:
+    """The target label of formats.md: ``p<N>/<limb>`` when labelled, else ``t<tracker>``.
+
+    >>> make_label(2, Limb.LEFT_HAND, 7), make_label(0, Limb.UNKNOWN, 7)
+    ('p2/left_hand', 't7')
+    """
+    if person > 0 and limb is not Limb.UNKNOWN:
+        return f"p{person}/{limb.key}"
+    return f"t{tracker_id}"
+
+
+def parse_label(label: str) -> tuple[int, Limb]:
+    """``'p2/left_hand'`` -> ``(2, Limb.LEFT_HAND)``; ``'t7'`` -> ``(0, Limb.UNKNOWN)``.
+
+    >>> parse_label("p2/left_hand")
+    (2, <Limb.LEFT_HAND: 1>)
+    """
+    m = LABEL_RE.match(label)
+    if m is None:
+        raise ValueError(f"target label must look like 'p1/head', 'p2/left_hand' or 't5', "
+                         f"got {label!r}")
+    if m["tracker"] is not None:
+        return 0, Limb.UNKNOWN
+    return int(m["person"]), Limb.from_key(m["limb"])
+
+
+@dataclass(frozen=True, slots=True)
+class FrameSet:
+    """Synchronised frames of one instant.
+
+    index : int
+        Frame-set number, 0-based, on the recording's nominal grid.
+    t_ns : int
+        Time of the set on the recording clock, ns from t = 0.
+    images : Mapping[str, (H, W, 3) uint8 BGR]
+        One image per camera that has a frame within half a period of ``t_ns``; a camera
+        with a dropped or missing frame is absent.
+    frame_t_ns : Mapping[str, int]
+        The timestamp of each camera's frame (may differ from ``t_ns`` by jitter).
+    """
+
+    index: int
+    t_ns: int
+    images: Mapping[str, np.ndarray]
+    frame_t_ns: Mapping[str, int] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        for cam, img in self.images.items():
+            require_shape(f"images[{cam!r}]", img, (None, None, 3), np.uint8)
+
+
+@dataclass(frozen=True, slots=True)
+class TargetSnapshot:
+    """A tracked target at one instant, as written to ``/targets``.
+
+    target_id : int   tracker id (``tracker`` metadata)
+    person : int      person number N of ``pN`` (0 = not assigned)
+    limb : Limb
+    phase : Phase
+    mean_m : (3,) float64, world frame, metres
+    cov_m2 : (3, 3) float64, m^2
+    carried_hue_deg : float | None
+    """
+
+    target_id: int
+    person: int
+    limb: Limb
+    phase: Phase
+    mean_m: np.ndarray
+    cov_m2: np.ndarray = field(default_factory=lambda: np.zeros((3, 3)))
+    carried_hue_deg: float | None = None
+
+    def __post_init__(self) -> None:
+        mean = np.asarray(self.mean_m, dtype=np.float64)
+        cov = np.asarray(self.cov_m2, dtype=np.float64)
+        require_shape("mean_m", mean, (3,), np.floating)
+        require_shape("cov_m2", cov, (3, 3), np.floating)
+        readonly(mean, cov)
+        object.__setattr__(self, "mean_m", mean)
+        object.__setattr__(self, "cov_m2", cov)
+
+    @property
+    def label(self) -> str:
+        return make_label(self.person, self.limb, self.target_id)
+
+
+@dataclass(frozen=True, slots=True)
+class CandidateSet:
+    """3D candidate points of one frame set.
+
+    points_m : (K, 3) float64, world frame, metres
+    prior : (K,) float64, p(Z) in [0, 1]
+    """
+
+    points_m: np.ndarray
+    prior: np.ndarray
+
+    def __post_init__(self) -> None:
+        require_shape("points_m", self.points_m, (None, 3), np.floating)
+        require_shape("prior", self.prior, (len(self.points_m),), np.floating)
+        readonly(self.points_m, self.prior)
+
+    @classmethod
+    def empty(cls) -> CandidateSet:
+        return cls(np.zeros((0, 3)), np.zeros(0))
+
+
+@dataclass(frozen=True, slots=True)
+class ActivityEvent:
+    """A recognised (or ground-truth) activity.
+
+    Times are ns on the recording clock. ``actors`` are target labels (``p1/right_hand``),
+    ``persons`` person labels (``p1``). ``from_actor``/``to_actor`` are set for exchanges.
+    ``rule`` is ``<rules file>:<rule name>`` (``ground_truth`` for annotations).
+    """
+
+    activity: str
+    start_ns: int
+    climax_ns: int
+    end_ns: int
+    actors: tuple[str, ...]
+    persons: tuple[str, ...]
+    rule: str
+    confidence: float = 1.0
+    object_hue_deg: float | None = None
+    from_actor: str | None = None
+    to_actor: str | None = None
+    object_name: str | None = None
+
+    def __post_init__(self) -> None:
+        if not self.start_ns <= self.climax_ns <= self.end_ns:
+            raise ValueError(f"event {self.activity}: need start_ns <= climax_ns <= end_ns, got "
+                             f"{self.start_ns}, {self.climax_ns}, {self.end_ns}")
+        if not 0.0 <= self.confidence <= 1.0:
+            raise ValueError(f"event {self.activity}: confidence must be in [0, 1], "
+                             f"got {self.confidence}")
+        for a in self.actors:
+            parse_label(a)

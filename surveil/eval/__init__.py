@@ -1,0 +1,1 @@
+"""Scoring of output MCAP files against ground truth (``surveil eval``)."""

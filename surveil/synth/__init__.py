@@ -1,0 +1,1 @@
+"""Synthetic multi-camera recordings with ground truth (``surveil synth``)."""

@@ -1,0 +1,40 @@
+"""Argument checks for public boundaries. Messages name the argument, what was expected and
+what was received."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def require_shape(
+    name: str, arr: object, shape: tuple[int | None, ...], kind: type = np.number
+) -> None:
+    """Raise unless ``arr`` is an ndarray of the given shape (None = any) and dtype kind.
+
+    >>> require_shape("points_m", np.zeros((4, 3)), (None, 3), np.floating)
+    >>> require_shape("points_m", np.zeros((4, 2)), (None, 3), np.floating)
+    Traceback (most recent call last):
+    ...
+    ValueError: points_m must have shape (None, 3) (None = any), got (4, 2)
+    """
+    if not isinstance(arr, np.ndarray):
+        raise TypeError(f"{name} must be a numpy array, got {type(arr).__name__}")
+    if arr.ndim != len(shape) or any(s not in (None, a) for s, a in zip(shape, arr.shape)):
+        raise ValueError(f"{name} must have shape {shape} (None = any), got {arr.shape}")
+    if not np.issubdtype(arr.dtype, kind):
+        raise TypeError(f"{name} must have a {kind.__name__} dtype, got {arr.dtype}")
+
+
+def require_finite(name: str, arr: np.ndarray) -> None:
+    """Raise ValueError if ``arr`` holds NaN or infinity, saying how many and where first."""
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        first = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise ValueError(f"{name} must be finite, got {int(bad.sum())} non-finite values "
+                         f"(first at index {first})")
+
+
+def readonly(*arrays: np.ndarray) -> None:
+    """Mark arrays read-only so that data passed between stages cannot be changed in place."""
+    for arr in arrays:
+        arr.flags.writeable = False
