@@ -22,6 +22,7 @@ from surveil.validate import readonly, require_finite, require_shape
 
 CAMERA_NAME_RE = re.compile(r"^[A-Za-z0-9_.-]+$")
 DIST_LENGTHS = (4, 5, 8, 12, 14)
+UNDISTORT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-14)
 
 
 @dataclass(frozen=True, slots=True)
@@ -149,7 +150,10 @@ class Camera:
         require_shape("pixels_px", px, (None, 2), np.floating)
         if len(px) == 0:
             return np.zeros((0, 2))
-        return cv2.undistortPoints(px.reshape(-1, 1, 2), self.K, self.dist).reshape(-1, 2)
+        # OpenCV's default iteration limit leaves ~1e-6 m errors at room scale; iterate to
+        # convergence so back-projection inverts projection to float precision
+        return cv2.undistortPoints(px.reshape(-1, 1, 2), self.K, self.dist,
+                                   criteria=UNDISTORT_CRITERIA).reshape(-1, 2)
 
     def backproject(self, pixels_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Lines of sight through pixels (undistorting first).
