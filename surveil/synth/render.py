@@ -174,9 +174,9 @@ class CameraRenderer:
                 hit = tb < t
                 t = np.where(hit, tb, t)
                 normal[hit] = nb[hit]
-                grain = 0.92 + 0.08 * _value_noise(C[0] + tb * d_w[..., 0],
-                                                   C[1] + tb * d_w[..., 1], 0.03, 7)
-                albedo[hit] = (box.albedo[None, :] * grain[hit][:, None]).astype(np.float32)
+                hit_xy = C[:2] + tb[hit][:, None] * d_w[hit][:, :2]
+                grain = 0.92 + 0.08 * _value_noise(hit_xy[:, 0], hit_xy[:, 1], 0.03, 7)
+                albedo[hit] = (box.albedo[None, :] * grain[:, None]).astype(np.float32)
                 cls[hit] = box.mask_class
                 is_floor &= ~hit
         P = C + t[..., None] * d_w
