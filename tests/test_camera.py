@@ -12,11 +12,6 @@ DIST5 = np.array([-0.12, 0.03, 0.0005, -0.0003, 0.001])
 DIST8 = np.array([-0.12, 0.03, 0.0005, -0.0003, 0.001, 0.02, -0.01, 0.003])
 
 
-@pytest.fixture
-def rng() -> np.random.Generator:
-    return np.random.default_rng(1234)
-
-
 def make_camera(dist: np.ndarray, name: str = "cam0") -> Camera:
     """A camera at (0.5, -3, 1.8) looking at (0, 0, 1): a generic, non-axis-aligned pose."""
     return look_at(

@@ -268,13 +268,16 @@ def _render(scenario: Scenario, scenario_path: Path, out: Path, preview: bool,
             image, winner, full_area, boxes = r.render(prims, np.array(casters), illumination,
                                                 rng_noise)
             writers[name].write(image, int(stamps[k, c]))
-            # visibility: enough of the limb's own area shows, and its centre is in the image
+            # visible: the limb's centre is in the image and not occluded, and at least
+            # MIN_VISIBLE_FRACTION of the area it would cover unoccluded shows
             px, depth = r.cam.project(positions[k])
             inside = r.cam.in_image(px, depth)
+            centre_px, centre_ok = r.canvas_pixel(positions[k])
+            centre_winner = np.where(centre_ok, winner[centre_px[:, 1], centre_px[:, 0]], -1)
             for j, label in enumerate(labels):
                 idx = limb_prims[label]
                 full = max(int(full_area[i]) for i in idx)
-                if full < min_px or not inside[j]:
+                if full < min_px or not inside[j] or centre_winner[j] not in idx:
                     continue
                 shown = 0
                 for i in idx:

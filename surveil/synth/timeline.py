@@ -211,6 +211,7 @@ class Compiler:
                 side = hand.removesuffix("_hand")
                 actor.hands[side] = Track(actor.carry(side))
         self.events: list[ActivityEvent] = []
+        self.busy: dict[str, list[tuple[float, float, str]]] = {}
 
     # -- helpers ------------------------------------------------------------------------------
 
@@ -231,9 +232,22 @@ class Compiler:
         label = f"{actor.pid}/{side}_hand"
         return actor.carry(side) if self.held_object(label, t_after) else actor.rest(side)
 
+    def claim(self, label: str, t0: float, t1: float, what: str) -> None:
+        """Reserve a limb for [t0, t1]; two actions may not move one hand at once."""
+        for b0, b1, other in self.busy.get(label, []):
+            if t0 < b1 and b0 < t1:
+                raise ConfigError(
+                    f"actions: {label} is busy with {other} ({b0:.2f}-{b1:.2f} s) when "
+                    f"{what} ({t0:.2f}-{t1:.2f} s) needs it; move one of them in time")
+        self.busy.setdefault(label, []).append((t0, t1, what))
+
     def event(self, activity: str, t0: float, climax: float, t_end: float,
               actors: tuple[str, ...], persons: tuple[str, ...], obj: str | None = None,
               frm: str | None = None, to: str | None = None) -> None:
+        what = f"{persons[0]} {activity} at {t0:.2f} s"
+        for label in actors:
+            if label.endswith("_hand"):
+                self.claim(label, t0, t_end, what)
         hue = self.objects[obj].hue_deg if obj else None
         self.events.append(ActivityEvent(
             activity=activity, start_ns=round(t0 * NS), climax_ns=round(climax * NS),
@@ -343,10 +357,13 @@ class Compiler:
                 who.hands["right"].move(t0, climax, const(base))
             who.hands["right"].move(climax + hold, climax + hold + back,
                                     self.home(who, "right", climax + hold + back))
+        hands = (f"{actor.pid}/right_hand", f"{other.pid}/right_hand")
         if touching:
-            self.event("handshake", t0, climax, climax + hold + back,
-                       (f"{actor.pid}/right_hand", f"{other.pid}/right_hand"),
+            self.event("handshake", t0, climax, climax + hold + back, hands,
                        (actor.pid, other.pid))
+        else:  # a near miss: no event, but the hands are still busy
+            for label in hands:
+                self.claim(label, t0, climax + hold + back, f"{actor.pid} approach")
 
     def do_approach(self, act: ActionSpec, actor: Actor, t0: float) -> None:
         self.do_handshake(act, actor, t0, gap_m=act.gap_m)

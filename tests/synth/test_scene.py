@@ -1,0 +1,114 @@
+"""End-to-end checks of `surveil synth` on the small shared recording (tests/conftest.py)."""
+
+import json
+
+import cv2
+import numpy as np
+import pytest
+
+from surveil.cli import ExitCode, main
+from surveil.io.calibration import load_rig
+from surveil.io.ground_truth import MaskClass, load_ground_truth
+from surveil.io.recording import open_recording
+from surveil.synth.scene import synthesise
+
+
+@pytest.fixture(scope="module")
+def gt(small_recording):
+    return load_ground_truth(small_recording)
+
+
+def test_projected_visible_hands_land_on_skin_pixels(small_recording, gt):
+    rig = load_rig(small_recording / "ground_truth" / "rig_true.yaml")
+    on_skin = total = 0
+    for c, cam in enumerate(gt.cameras):
+        for i, frame in enumerate(gt.frames):
+            mask_path = small_recording / "ground_truth" / "masks" / cam / f"{frame:06d}.png"
+            if not mask_path.exists():
+                assert not gt.visible[i, :, c].any(), "no frame, so nothing can be visible"
+                continue
+            mask = cv2.imread(str(mask_path))
+            px, _ = rig[cam].project(gt.positions_m[i])
+            for j, label in enumerate(gt.labels):
+                if "hand" in label and gt.visible[i, j, c]:
+                    u, v = np.round(px[j]).astype(int)
+                    total += 1
+                    on_skin += mask[v, u, 0] == MaskClass.SKIN
+    assert total > 100
+    assert on_skin / total >= 0.95
+
+
+def test_most_limbs_are_seen_by_two_or_more_cameras(gt):
+    assert (gt.n_views >= 2).mean() > 0.7
+
+
+def test_rendered_skin_pixels_look_like_skin(small_recording, gt):
+    """The masks and the video agree: pixels labelled skin have skin hue in the frame."""
+    rec = open_recording(small_recording)
+    fs = next(iter(rec.framesets(start=10, stop=11)))
+    cam = sorted(fs.images)[0]
+    mask = cv2.imread(str(small_recording / "ground_truth" / "masks" / cam / "000010.png"))
+    hsv = cv2.cvtColor(fs.images[cam], cv2.COLOR_BGR2HSV)
+    skin = mask[..., 0] == MaskClass.SKIN
+    assert skin.sum() > 50
+    hue_deg = hsv[..., 0][skin].astype(float) * 2
+    assert np.median(np.minimum(hue_deg, 360 - hue_deg)) < 40  # reddish-orange
+
+
+def test_recording_is_readable_with_drops_and_late_start(small_recording, gt):
+    rec = open_recording(small_recording)
+    assert rec.camera_names == gt.cameras
+    meta = json.loads((small_recording / "ground_truth" / "scene.json").read_text())
+    assert meta["missing_frames"]["cam3"] >= 7  # 0.5 s late start at 15 fps
+    sets = list(rec.framesets())
+    assert len(sets) == len(gt.frames)
+    early = [fs for fs in sets if fs.t_ns < 0.45e9]
+    assert early and all("cam3" not in fs.images for fs in early)
+    assert all(fs.images[c].shape == (240, 320, 3) for fs in sets for c in fs.images)
+
+
+def test_written_rig_carries_a_small_calibration_error(small_recording):
+    true = load_rig(small_recording / "ground_truth" / "rig_true.yaml")
+    written = load_rig(small_recording / "rig.yaml")
+    for cam in true:
+        shift = np.linalg.norm(cam.centre_m - written[cam.name].centre_m)
+        assert 0 < shift < 0.05
+
+
+def test_true_events_are_written(gt):
+    assert [e.activity for e in gt.events] == ["exchange", "touch_face"]
+    ex = gt.events[0]
+    assert (ex.from_actor, ex.to_actor, ex.object_hue_deg) == (
+        "p1/right_hand", "p2/left_hand", 120.0)
+
+
+def test_same_seed_gives_identical_ground_truth_and_reuses_up_to_date_output(
+        small_scenario, small_recording, tmp_path):
+    out = tmp_path / "again"
+    synthesise(small_scenario, out)
+    for name in ("limbs.csv", "objects.csv", "events.json"):
+        assert (out / "ground_truth" / name).read_bytes() == (
+            small_recording / "ground_truth" / name).read_bytes()
+    assert (out / "cam0.csv").read_bytes() == (small_recording / "cam0.csv").read_bytes()
+    assert synthesise(small_scenario, out).reused
+
+
+def test_synth_refuses_to_overwrite_a_foreign_directory(small_scenario, tmp_path, capsys):
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "notes.txt").write_text("keep me")
+    code = main(["synth", str(small_scenario), "--out", str(tmp_path / "mine")])
+    assert code == ExitCode.BAD_INPUT
+    assert "is not a recording made by `surveil synth`" in capsys.readouterr().err
+    assert (tmp_path / "mine" / "notes.txt").read_text() == "keep me"
+
+
+def test_synth_cli_reports_a_bad_scenario(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[scene]\nfps = -3\n")
+    assert main(["synth", str(bad)]) == ExitCode.BAD_INPUT
+    assert "scene.fps must be >= 1.0, got -3" in capsys.readouterr().err
+
+
+def test_preview_contact_sheet_is_written(small_recording):
+    sheet = cv2.imread(str(small_recording / "preview.png"))
+    assert sheet is not None and sheet.shape[1] == 4 * 320 and sheet.std() > 10
