@@ -56,16 +56,31 @@ def main(argv: list[str] | None = None) -> int:
         hits, total = hands_on_skin(args.out / path.stem)
         two_views = float((gt.n_views >= 2).mean())
         ms = 1000 * summary.render_s / summary.n_camera_frames
-        rows.append((path.stem, summary.n_frames, len(summary.cameras),
-                     summary.n_camera_frames, ms, summary.render_s, hits / max(total, 1),
-                     total, two_views, len(summary.events)))
+        rows.append(
+            (
+                path.stem,
+                summary.n_frames,
+                len(summary.cameras),
+                summary.n_camera_frames,
+                ms,
+                summary.render_s,
+                hits / max(total, 1),
+                total,
+                two_views,
+                len(summary.events),
+            )
+        )
         print(f"{path.stem}: {ms:.1f} ms per camera frame", file=sys.stderr)
-    print("| scenario | frame sets | cameras | camera frames | ms / camera frame | total s "
-          "| visible hands on skin | hands checked | limb-frames in >= 2 views | events |")
+    print(
+        "| scenario | frame sets | cameras | camera frames | ms / camera frame | total s "
+        "| visible hands on skin | hands checked | limb-frames in >= 2 views | events |"
+    )
     print("|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
-        print(f"| {r[0]} | {r[1]} | {r[2]} | {r[3]} | {r[4]:.1f} | {r[5]:.1f} | {r[6]:.3f} "
-              f"| {r[7]} | {r[8]:.3f} | {r[9]} |")
+        print(
+            f"| {r[0]} | {r[1]} | {r[2]} | {r[3]} | {r[4]:.1f} | {r[5]:.1f} | {r[6]:.3f} "
+            f"| {r[7]} | {r[8]:.3f} | {r[9]} |"
+        )
     med = float(np.median([r[4] for r in rows]))
     print(f"\nmedian {med:.1f} ms per 640x480 camera frame")
     return 0

@@ -58,8 +58,9 @@ class Camera:
         if not isinstance(self.name, str) or not CAMERA_NAME_RE.match(self.name):
             raise ValueError(f"camera name must match [A-Za-z0-9_.-]+, got {self.name!r}")
         if int(self.width) <= 0 or int(self.height) <= 0:
-            raise ValueError(f"camera {self.name}: image size must be positive, "
-                             f"got {self.width}x{self.height}")
+            raise ValueError(
+                f"camera {self.name}: image size must be positive, got {self.width}x{self.height}"
+            )
         K = np.array(self.K, dtype=np.float64)
         dist = np.array(self.dist, dtype=np.float64).reshape(-1)
         R = np.array(self.R, dtype=np.float64)
@@ -68,16 +69,22 @@ class Camera:
         require_shape(f"camera {self.name}: R", R, (3, 3), np.floating)
         require_shape(f"camera {self.name}: t", t, (3,), np.floating)
         if dist.shape[0] not in DIST_LENGTHS:
-            raise ValueError(f"camera {self.name}: dist must have 4, 5, 8, 12 or 14 "
-                             f"coefficients, got {dist.shape[0]}")
+            raise ValueError(
+                f"camera {self.name}: dist must have 4, 5, 8, 12 or 14 "
+                f"coefficients, got {dist.shape[0]}"
+            )
         for arr_name, arr in (("K", K), ("dist", dist), ("R", R), ("t", t)):
             require_finite(f"camera {self.name}: {arr_name}", arr)
         if not np.allclose(R @ R.T, np.eye(3), atol=1e-6) or np.linalg.det(R) < 0:
-            raise ValueError(f"camera {self.name}: R must be a rotation matrix "
-                             f"(orthonormal, det +1), got det {np.linalg.det(R):.6f}")
+            raise ValueError(
+                f"camera {self.name}: R must be a rotation matrix "
+                f"(orthonormal, det +1), got det {np.linalg.det(R):.6f}"
+            )
         if K[0, 0] <= 0 or K[1, 1] <= 0:
-            raise ValueError(f"camera {self.name}: K must have positive focal lengths, "
-                             f"got fx={K[0, 0]}, fy={K[1, 1]}")
+            raise ValueError(
+                f"camera {self.name}: K must have positive focal lengths, "
+                f"got fx={K[0, 0]}, fy={K[1, 1]}"
+            )
         rvec = cv2.Rodrigues(R)[0].reshape(3)
         for attr, value in (("K", K), ("dist", dist), ("R", R), ("t", t), ("_rvec", rvec)):
             readonly(value)
@@ -152,8 +159,9 @@ class Camera:
             return np.zeros((0, 2))
         # OpenCV's default iteration limit leaves ~1e-6 m errors at room scale; iterate to
         # convergence so back-projection inverts projection to float precision
-        return cv2.undistortPoints(px.reshape(-1, 1, 2), self.K, self.dist,
-                                   criteria=UNDISTORT_CRITERIA).reshape(-1, 2)
+        return cv2.undistortPoints(
+            px.reshape(-1, 1, 2), self.K, self.dist, criteria=UNDISTORT_CRITERIA
+        ).reshape(-1, 2)
 
     def backproject(self, pixels_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Lines of sight through pixels (undistorting first).
@@ -179,8 +187,7 @@ class Camera:
     def in_image(self, pixels_px: np.ndarray, depth_m: np.ndarray) -> np.ndarray:
         """(N,) bool: in front of the camera and inside the image bounds."""
         u, v = pixels_px[:, 0], pixels_px[:, 1]
-        return (depth_m > 0) & (u >= 0) & (v >= 0) & (u <= self.width - 1) & (
-            v <= self.height - 1)
+        return (depth_m > 0) & (u >= 0) & (v >= 0) & (u <= self.width - 1) & (v <= self.height - 1)
 
 
 @dataclass(frozen=True, slots=True)
@@ -235,7 +242,7 @@ def look_at(
     height: int,
     hfov_deg: float,
     dist: np.ndarray | None = None,
-    up: np.ndarray = np.array([0.0, 0.0, 1.0]),
+    up: tuple[float, float, float] = (0.0, 0.0, 1.0),
 ) -> Camera:
     """A camera at ``centre_m`` looking at ``target_m`` with world ``up`` towards image top.
 
@@ -251,7 +258,7 @@ def look_at(
     centre = np.asarray(centre_m, dtype=np.float64)
     forward = np.asarray(target_m, dtype=np.float64) - centre
     forward /= np.linalg.norm(forward)
-    right = np.cross(forward, up)
+    right = np.cross(forward, np.asarray(up, dtype=np.float64))
     if np.linalg.norm(right) < 1e-9:
         raise ValueError(f"camera {name}: viewing direction is parallel to up; pick another up")
     right /= np.linalg.norm(right)
@@ -259,5 +266,4 @@ def look_at(
     R = np.stack([right, down, forward])  # rows: camera axes in world coordinates
     f = 0.5 * width / np.tan(np.radians(hfov_deg) / 2)
     K = np.array([[f, 0, (width - 1) / 2], [0, f, (height - 1) / 2], [0, 0, 1]])
-    return Camera(name, width, height, K, np.zeros(5) if dist is None else dist, R,
-                  -R @ centre)
+    return Camera(name, width, height, K, np.zeros(5) if dist is None else dist, R, -R @ centre)

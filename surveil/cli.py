@@ -32,8 +32,9 @@ class ExitCode(enum.IntEnum):
 
 def configure_logging(verbosity: int) -> None:
     level = {-1: logging.WARNING, 0: logging.INFO}.get(verbosity, logging.DEBUG)
-    logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s",
-                        stream=sys.stderr, force=True)
+    logging.basicConfig(
+        level=level, format="%(levelname)s %(name)s: %(message)s", stream=sys.stderr, force=True
+    )
 
 
 def progress_bar(desc: str, quiet: bool) -> Callable[[int, int], None]:
@@ -46,8 +47,14 @@ def progress_bar(desc: str, quiet: bool) -> Callable[[int, int], None]:
         if quiet:
             return
         if "bar" not in state:
-            state["bar"] = tqdm(total=total, desc=desc, unit="frame", file=sys.stderr,
-                                dynamic_ncols=True, leave=False)
+            state["bar"] = tqdm(
+                total=total,
+                desc=desc,
+                unit="frame",
+                file=sys.stderr,
+                dynamic_ncols=True,
+                leave=False,
+            )
         bar = state["bar"]
         bar.update(done - bar.n)
         if done >= total:
@@ -70,12 +77,19 @@ def cmd_synth(args: argparse.Namespace) -> ExitCode:
 
     out = args.out or args.scenario.with_suffix("")
     t0 = time.perf_counter()
-    summary = synthesise(args.scenario, out, preview=args.preview, overwrite=args.force,
-                         on_progress=progress_bar(f"synth {args.scenario.stem}", args.quiet))
+    summary = synthesise(
+        args.scenario,
+        out,
+        preview=args.preview,
+        overwrite=args.force,
+        on_progress=progress_bar(f"synth {args.scenario.stem}", args.quiet),
+    )
     elapsed = time.perf_counter() - t0
     print(summary.describe())
-    print(f"rendered in {elapsed:.1f} s "
-          f"({1000 * elapsed / max(summary.n_camera_frames, 1):.1f} ms per camera frame)")
+    print(
+        f"rendered in {elapsed:.1f} s "
+        f"({1000 * elapsed / max(summary.n_camera_frames, 1):.1f} ms per camera frame)"
+    )
     return ExitCode.OK
 
 
@@ -95,8 +109,13 @@ def cmd_demo(args: argparse.Namespace) -> ExitCode:
     scenario, out = demo_recording_dir()
     if args.out is not None:
         out = args.out
-    summary = synthesise(scenario, out, preview=True, overwrite=False,
-                         on_progress=progress_bar("synth demo", args.quiet))
+    summary = synthesise(
+        scenario,
+        out,
+        preview=True,
+        overwrite=False,
+        on_progress=progress_bar("synth demo", args.quiet),
+    )
     print(summary.describe())
     print(describe_recording(open_recording(out)).format())
     print(f"contact sheet: {out / 'preview.png'}")
@@ -106,9 +125,12 @@ def cmd_demo(args: argparse.Namespace) -> ExitCode:
 def cmd_eval(args: argparse.Namespace) -> ExitCode:
     from surveil.eval.score import EvalConfig, evaluate, format_report
 
-    cfg = EvalConfig(gate_m=args.gate, min_views=args.min_views,
-                     climax_tolerance_s=args.climax_tolerance,
-                     activities=tuple(args.activity) if args.activity else None)
+    cfg = EvalConfig(
+        gate_m=args.gate,
+        min_views=args.min_views,
+        climax_tolerance_s=args.climax_tolerance,
+        activities=tuple(args.activity) if args.activity else None,
+    )
     report = evaluate(args.recording, args.mcap, cfg)
     print(json.dumps(report.to_dict(), indent=2) if args.json else format_report(report))
     return ExitCode.OK
@@ -147,12 +169,14 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="surveil",
         description="Multi-camera 3D tracking of heads and hands, carried objects and "
-                    "activity events.")
+        "activity events.",
+    )
     parser.add_argument("--version", action="version", version=f"surveil {__version__}")
     parser.add_argument("-v", "--verbose", action="count", default=0, help="more logging")
     parser.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
-    parser.add_argument("--traceback", action="store_true",
-                        help="show the Python traceback of errors")
+    parser.add_argument(
+        "--traceback", action="store_true", help="show the Python traceback of errors"
+    )
     sub = parser.add_subparsers(dest="name", required=True, metavar="COMMAND")
 
     p = sub.add_parser("demo", help="synthesise (once) and process the bundled demo recording")
@@ -161,10 +185,17 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("synth", help="render a synthetic recording with ground truth")
     p.add_argument("scenario", type=Path, help="scenario TOML (see recordings/*.toml)")
-    p.add_argument("--out", type=Path, default=None,
-                   help="output recording directory (default: scenario path without .toml)")
-    p.add_argument("--preview", action="store_true",
-                   help="also write preview.png, a contact sheet of all cameras")
+    p.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        help="output recording directory (default: scenario path without .toml)",
+    )
+    p.add_argument(
+        "--preview",
+        action="store_true",
+        help="also write preview.png, a contact sheet of all cameras",
+    )
     p.add_argument("--force", action="store_true", help="overwrite an existing output")
     p.set_defaults(command=cmd_synth)
 
@@ -176,15 +207,30 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("eval", help="score an output MCAP against a recording's ground truth")
     p.add_argument("recording", type=Path, help="recording directory with ground_truth/")
     p.add_argument("mcap", type=Path, help="output MCAP of `surveil run`")
-    p.add_argument("--gate", type=float, default=0.25,
-                   help="max distance (m) for a target to match a true limb [0.25]")
-    p.add_argument("--min-views", type=int, default=2,
-                   help="a true limb counts for recall when seen by this many cameras [2]")
-    p.add_argument("--climax-tolerance", type=float, default=1.0,
-                   help="max climax time difference (s) for an event match [1.0]")
-    p.add_argument("--activity", action="append",
-                   help="score only these activities (repeatable; default: clap, handshake, "
-                        "exchange, pick, place and any activity in the MCAP)")
+    p.add_argument(
+        "--gate",
+        type=float,
+        default=0.25,
+        help="max distance (m) for a target to match a true limb [0.25]",
+    )
+    p.add_argument(
+        "--min-views",
+        type=int,
+        default=2,
+        help="a true limb counts for recall when seen by this many cameras [2]",
+    )
+    p.add_argument(
+        "--climax-tolerance",
+        type=float,
+        default=1.0,
+        help="max climax time difference (s) for an event match [1.0]",
+    )
+    p.add_argument(
+        "--activity",
+        action="append",
+        help="score only these activities (repeatable; default: clap, handshake, "
+        "exchange, pick, place and any activity in the MCAP)",
+    )
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     p.set_defaults(command=cmd_eval)
 
@@ -196,16 +242,25 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("rig", help="import, export calibration rigs")
     rig_sub = p.add_subparsers(dest="rig_command", required=True, metavar="ACTION")
     q = rig_sub.add_parser("import", help="convert another tool's calibration to a rig YAML")
-    q.add_argument("source", type=Path,
-                   help="OpenCV multiview file, aniposelib/Pose2Sim TOML, or EasyMocap "
-                        "intri.yml (with --extri)")
+    q.add_argument(
+        "source",
+        type=Path,
+        help="OpenCV multiview file, aniposelib/Pose2Sim TOML, or EasyMocap "
+        "intri.yml (with --extri)",
+    )
     q.add_argument("--out", type=Path, required=True, help="rig YAML to write")
-    q.add_argument("--format", choices=["surveil", "opencv-multiview", "aniposelib",
-                                        "easymocap"], default=None,
-                   help="source format (default: detected from the file)")
-    q.add_argument("--units", choices=["m", "mm", "cm"], default=None,
-                   help="length unit of the source's translations (required where the "
-                        "format does not say)")
+    q.add_argument(
+        "--format",
+        choices=["surveil", "opencv-multiview", "aniposelib", "easymocap"],
+        default=None,
+        help="source format (default: detected from the file)",
+    )
+    q.add_argument(
+        "--units",
+        choices=["m", "mm", "cm"],
+        default=None,
+        help="length unit of the source's translations (required where the format does not say)",
+    )
     q.add_argument("--extri", type=Path, default=None, help="EasyMocap extri.yml")
     q.set_defaults(command=cmd_rig_import)
     q = rig_sub.add_parser("export", help="write a rig as aniposelib TOML (anipose, Pose2Sim)")

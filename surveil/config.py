@@ -26,9 +26,15 @@ from surveil.errors import ConfigError
 T = TypeVar("T")
 
 
-def setting(default: Any = dataclasses.MISSING, doc: str = "", *, min: float | None = None,
-            max: float | None = None, choices: tuple | None = None,
-            default_factory: Any = dataclasses.MISSING) -> Any:
+def setting(
+    default: Any = dataclasses.MISSING,
+    doc: str = "",
+    *,
+    min: float | None = None,
+    max: float | None = None,
+    choices: tuple | None = None,
+    default_factory: Any = dataclasses.MISSING,
+) -> Any:
     """A dataclass field with a one-line description and an allowed range or set."""
     meta = {"doc": doc, "min": min, "max": max, "choices": choices}
     if default_factory is not dataclasses.MISSING:
@@ -69,9 +75,11 @@ def _convert(value: Any, tp: Any, where: str) -> Any:
                 return _convert(value, arg, where)
             except ConfigError as exc:
                 errors.append(str(exc))
-        raise ConfigError(errors[0] if len(errors) == 1 else
-                          f"{where} must be one of {', '.join(_type_name(a) for a in args)}, "
-                          f"got {value!r}")
+        raise ConfigError(
+            errors[0]
+            if len(errors) == 1
+            else f"{where} must be one of {', '.join(_type_name(a) for a in args)}, got {value!r}"
+        )
     if origin is tuple:
         if not isinstance(value, list | tuple):
             raise ConfigError(f"{where} must be a list, got {value!r}")
@@ -79,8 +87,10 @@ def _convert(value: Any, tp: Any, where: str) -> Any:
             return tuple(_convert(v, args[0], f"{where}[{i}]") for i, v in enumerate(value))
         if len(value) != len(args):
             raise ConfigError(f"{where} must be a list of {len(args)} values, got {value!r}")
-        return tuple(_convert(v, a, f"{where}[{i}]") for i, (v, a) in
-                     enumerate(zip(value, args)))
+        return tuple(
+            _convert(v, a, f"{where}[{i}]")
+            for i, (v, a) in enumerate(zip(value, args, strict=False))
+        )
     if origin is dict:
         if not isinstance(value, dict):
             raise ConfigError(f"{where} must be a table, got {value!r}")
@@ -129,8 +139,9 @@ def from_table(cls: type[T], table: dict[str, Any], where: str) -> T:
     sep = "" if where.endswith(": ") else "."
     unknown = sorted(set(table) - set(fields))
     if unknown:
-        raise ConfigError(f"{where}{sep}{unknown[0]} is not a known key; valid keys: "
-                          f"{', '.join(sorted(fields))}")
+        raise ConfigError(
+            f"{where}{sep}{unknown[0]} is not a known key; valid keys: {', '.join(sorted(fields))}"
+        )
     kwargs = {}
     for name, f in fields.items():
         key = f"{where}{sep}{name}"
@@ -145,8 +156,9 @@ def from_table(cls: type[T], table: dict[str, Any], where: str) -> T:
         if hi is not None and value > hi:
             raise ConfigError(f"{key} must be <= {hi}, got {value!r}")
         if choices is not None and value not in choices:
-            raise ConfigError(f"{key} must be one of {', '.join(map(repr, choices))}, "
-                              f"got {value!r}")
+            raise ConfigError(
+                f"{key} must be one of {', '.join(map(repr, choices))}, got {value!r}"
+            )
         kwargs[name] = value
     try:
         return cls(**kwargs)

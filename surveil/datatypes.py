@@ -47,8 +47,9 @@ class Limb(enum.IntEnum):
         try:
             return cls[key.upper()]
         except KeyError:
-            raise ValueError(f"unknown limb {key!r}; expected head, left_hand or right_hand"
-                             ) from None
+            raise ValueError(
+                f"unknown limb {key!r}; expected head, left_hand or right_hand"
+            ) from None
 
 
 class Phase(enum.Enum):
@@ -66,8 +67,10 @@ class Phase(enum.Enum):
         return {"unlabelled": 0, "normal": 1, "combined": 2, "lost": 3}.get(self.value, 255)
 
 
-LABEL_RE = re.compile(r"^(?:p(?P<person>[1-9][0-9]*)/(?P<limb>head|left_hand|right_hand)"
-                      r"|t(?P<tracker>[0-9]+))$")
+LABEL_RE = re.compile(
+    r"^(?:p(?P<person>[1-9][0-9]*)/(?P<limb>head|left_hand|right_hand)"
+    r"|t(?P<tracker>[0-9]+))$"
+)
 
 
 def make_label(person: int, limb: Limb, tracker_id: int) -> str:
@@ -89,8 +92,9 @@ def parse_label(label: str) -> tuple[int, Limb]:
     """
     m = LABEL_RE.match(label)
     if m is None:
-        raise ValueError(f"target label must look like 'p1/head', 'p2/left_hand' or 't5', "
-                         f"got {label!r}")
+        raise ValueError(
+            f"target label must look like 'p1/head', 'p2/left_hand' or 't5', got {label!r}"
+        )
     if m["tracker"] is not None:
         return 0, Limb.UNKNOWN
     return int(m["person"]), Limb.from_key(m["limb"])
@@ -201,10 +205,13 @@ class ActivityEvent:
 
     def __post_init__(self) -> None:
         if not self.start_ns <= self.climax_ns <= self.end_ns:
-            raise ValueError(f"event {self.activity}: need start_ns <= climax_ns <= end_ns, got "
-                             f"{self.start_ns}, {self.climax_ns}, {self.end_ns}")
+            raise ValueError(
+                f"event {self.activity}: need start_ns <= climax_ns <= end_ns, got "
+                f"{self.start_ns}, {self.climax_ns}, {self.end_ns}"
+            )
         if not 0.0 <= self.confidence <= 1.0:
-            raise ValueError(f"event {self.activity}: confidence must be in [0, 1], "
-                             f"got {self.confidence}")
+            raise ValueError(
+                f"event {self.activity}: confidence must be in [0, 1], got {self.confidence}"
+            )
         for a in self.actors:
             parse_label(a)

@@ -19,7 +19,9 @@ def require_shape(
     """
     if not isinstance(arr, np.ndarray):
         raise TypeError(f"{name} must be a numpy array, got {type(arr).__name__}")
-    if arr.ndim != len(shape) or any(s not in (None, a) for s, a in zip(shape, arr.shape)):
+    if arr.ndim != len(shape) or any(
+        s not in (None, a) for s, a in zip(shape, arr.shape, strict=False)
+    ):
         raise ValueError(f"{name} must have shape {shape} (None = any), got {arr.shape}")
     if not np.issubdtype(arr.dtype, kind):
         raise TypeError(f"{name} must have a {kind.__name__} dtype, got {arr.dtype}")
@@ -30,8 +32,10 @@ def require_finite(name: str, arr: np.ndarray) -> None:
     bad = ~np.isfinite(arr)
     if bad.any():
         first = tuple(int(i) for i in np.argwhere(bad)[0])
-        raise ValueError(f"{name} must be finite, got {int(bad.sum())} non-finite values "
-                         f"(first at index {first})")
+        raise ValueError(
+            f"{name} must be finite, got {int(bad.sum())} non-finite values "
+            f"(first at index {first})"
+        )
 
 
 def readonly(*arrays: np.ndarray) -> None:

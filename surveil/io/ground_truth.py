@@ -90,20 +90,35 @@ class GroundTruth:
 
 
 def event_to_dict(ev: ActivityEvent) -> dict:
-    return {"activity": ev.activity, "start_ns": ev.start_ns, "climax_ns": ev.climax_ns,
-            "end_ns": ev.end_ns, "actors": list(ev.actors), "persons": list(ev.persons),
-            "object": ev.object_name, "object_hue_deg": ev.object_hue_deg,
-            "from": ev.from_actor, "to": ev.to_actor}
+    return {
+        "activity": ev.activity,
+        "start_ns": ev.start_ns,
+        "climax_ns": ev.climax_ns,
+        "end_ns": ev.end_ns,
+        "actors": list(ev.actors),
+        "persons": list(ev.persons),
+        "object": ev.object_name,
+        "object_hue_deg": ev.object_hue_deg,
+        "from": ev.from_actor,
+        "to": ev.to_actor,
+    }
 
 
 def event_from_dict(d: dict, where: str) -> ActivityEvent:
     try:
         return ActivityEvent(
-            activity=str(d["activity"]), start_ns=int(d["start_ns"]),
-            climax_ns=int(d["climax_ns"]), end_ns=int(d["end_ns"]),
-            actors=tuple(d.get("actors", ())), persons=tuple(d.get("persons", ())),
-            rule="ground_truth", object_hue_deg=d.get("object_hue_deg"),
-            from_actor=d.get("from"), to_actor=d.get("to"), object_name=d.get("object"))
+            activity=str(d["activity"]),
+            start_ns=int(d["start_ns"]),
+            climax_ns=int(d["climax_ns"]),
+            end_ns=int(d["end_ns"]),
+            actors=tuple(d.get("actors", ())),
+            persons=tuple(d.get("persons", ())),
+            rule="ground_truth",
+            object_hue_deg=d.get("object_hue_deg"),
+            from_actor=d.get("from"),
+            to_actor=d.get("to"),
+            object_name=d.get("object"),
+        )
     except (KeyError, TypeError, ValueError) as exc:
         raise InputError(f"{where}: bad event {d!r}: {exc}") from None
 
@@ -111,42 +126,70 @@ def event_from_dict(d: dict, where: str) -> ActivityEvent:
 def write_ground_truth(directory: Path, gt: GroundTruth) -> None:
     """Write ``gt`` into ``directory`` (the recording's ``ground_truth/``), masks aside."""
     directory.mkdir(parents=True, exist_ok=True)
-    meta = dict(gt.meta, format=FORMAT_NAME, version=FORMAT_VERSION,
-                cameras=list(gt.cameras), n_frames=len(gt.frames))
+    meta = dict(
+        gt.meta,
+        format=FORMAT_NAME,
+        version=FORMAT_VERSION,
+        cameras=list(gt.cameras),
+        n_frames=len(gt.frames),
+    )
     (directory / "scene.json").write_text(json.dumps(meta, indent=2))
     with open(directory / "limbs.csv", "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["frame", "t_ns", "label", "x_m", "y_m", "z_m", "visible_in"])
         cams = np.array(gt.cameras)
-        for i, (frame, t) in enumerate(zip(gt.frames, gt.t_ns)):
+        for i, (frame, t) in enumerate(zip(gt.frames, gt.t_ns, strict=False)):
             for j, label in enumerate(gt.labels):
                 x, y, z = gt.positions_m[i, j]
                 if not np.isfinite(x):
                     continue
-                w.writerow([int(frame), int(t), label, f"{x:.5f}", f"{y:.5f}", f"{z:.5f}",
-                            ";".join(cams[gt.visible[i, j]])])
+                w.writerow(
+                    [
+                        int(frame),
+                        int(t),
+                        label,
+                        f"{x:.5f}",
+                        f"{y:.5f}",
+                        f"{z:.5f}",
+                        ";".join(cams[gt.visible[i, j]]),
+                    ]
+                )
     with open(directory / "objects.csv", "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["frame", "t_ns", "object", "x_m", "y_m", "z_m", "held_by"])
-        for i, (frame, t) in enumerate(zip(gt.frames, gt.t_ns)):
+        for i, (frame, t) in enumerate(zip(gt.frames, gt.t_ns, strict=False)):
             for k, name in enumerate(gt.object_names):
                 x, y, z = gt.object_positions_m[i, k]
-                w.writerow([int(frame), int(t), name, f"{x:.5f}", f"{y:.5f}", f"{z:.5f}",
-                            gt.held_by[i, k]])
+                w.writerow(
+                    [
+                        int(frame),
+                        int(t),
+                        name,
+                        f"{x:.5f}",
+                        f"{y:.5f}",
+                        f"{z:.5f}",
+                        gt.held_by[i, k],
+                    ]
+                )
     (directory / "events.json").write_text(
-        json.dumps([event_to_dict(e) for e in gt.events], indent=2))
+        json.dumps([event_to_dict(e) for e in gt.events], indent=2)
+    )
 
 
 def _read_csv(path: Path, columns: list[str]) -> list[dict[str, str]]:
     if not path.is_file():
-        raise InputError(f"{path}: ground-truth file is missing; regenerate the recording "
-                         f"with `surveil synth` or add the file (see docs/formats.md)")
+        raise InputError(
+            f"{path}: ground-truth file is missing; regenerate the recording "
+            f"with `surveil synth` or add the file (see docs/formats.md)"
+        )
     with open(path, newline="") as f:
         reader = csv.DictReader(f)
         missing = [c for c in columns if c not in (reader.fieldnames or [])]
         if missing:
-            raise InputError(f"{path}: missing column(s) {', '.join(missing)}; "
-                             f"expected header {','.join(columns)}")
+            raise InputError(
+                f"{path}: missing column(s) {', '.join(missing)}; "
+                f"expected header {','.join(columns)}"
+            )
         return list(reader)
 
 
@@ -155,30 +198,34 @@ def load_ground_truth(recording_dir: Path) -> GroundTruth:
     directory = Path(recording_dir) / GT_DIR
     scene_path = directory / "scene.json"
     if not scene_path.is_file():
-        raise InputError(f"{recording_dir}: no ground truth ({scene_path} is missing); "
-                         f"only recordings made by `surveil synth` or annotated ones can be "
-                         f"scored")
+        raise InputError(
+            f"{recording_dir}: no ground truth ({scene_path} is missing); "
+            f"only recordings made by `surveil synth` or annotated ones can be "
+            f"scored"
+        )
     try:
         meta = json.loads(scene_path.read_text())
     except json.JSONDecodeError as exc:
         raise InputError(f"{scene_path}: not valid JSON: {exc}") from None
     if meta.get("format") != FORMAT_NAME or meta.get("version") != FORMAT_VERSION:
-        raise InputError(f"{scene_path}: expected format {FORMAT_NAME!r} version "
-                         f"{FORMAT_VERSION}, got {meta.get('format')!r} "
-                         f"version {meta.get('version')!r}")
+        raise InputError(
+            f"{scene_path}: expected format {FORMAT_NAME!r} version "
+            f"{FORMAT_VERSION}, got {meta.get('format')!r} "
+            f"version {meta.get('version')!r}"
+        )
     cameras = tuple(meta["cameras"])
     cam_idx = {c: i for i, c in enumerate(cameras)}
     limb_path = directory / "limbs.csv"
-    rows = _read_csv(limb_path, ["frame", "t_ns", "label", "x_m", "y_m", "z_m",
-                                 "visible_in"])
+    rows = _read_csv(limb_path, ["frame", "t_ns", "label", "x_m", "y_m", "z_m", "visible_in"])
     frame_t: dict[int, int] = {}
     labels: list[str] = []
     for r in rows:
         frame_t.setdefault(int(r["frame"]), int(r["t_ns"]))
         if r["label"] not in labels:
             labels.append(r["label"])
-    obj_rows = _read_csv(directory / "objects.csv",
-                         ["frame", "t_ns", "object", "x_m", "y_m", "z_m", "held_by"])
+    obj_rows = _read_csv(
+        directory / "objects.csv", ["frame", "t_ns", "object", "x_m", "y_m", "z_m", "held_by"]
+    )
     for r in obj_rows:
         frame_t.setdefault(int(r["frame"]), int(r["t_ns"]))
     frames = np.array(sorted(frame_t), dtype=np.int64)
@@ -192,12 +239,16 @@ def load_ground_truth(recording_dir: Path) -> GroundTruth:
         try:
             pos[i, j] = float(r["x_m"]), float(r["y_m"]), float(r["z_m"])
         except ValueError:
-            raise InputError(f"{limb_path}:{n}: coordinates must be numbers, got "
-                             f"{r['x_m']!r}, {r['y_m']!r}, {r['z_m']!r}") from None
+            raise InputError(
+                f"{limb_path}:{n}: coordinates must be numbers, got "
+                f"{r['x_m']!r}, {r['y_m']!r}, {r['z_m']!r}"
+            ) from None
         for cam in filter(None, r["visible_in"].split(";")):
             if cam not in cam_idx:
-                raise InputError(f"{limb_path}:{n}: camera {cam!r} is not in scene.json "
-                                 f"cameras ({', '.join(cameras)})")
+                raise InputError(
+                    f"{limb_path}:{n}: camera {cam!r} is not in scene.json "
+                    f"cameras ({', '.join(cameras)})"
+                )
             vis[i, j, cam_idx[cam]] = True
     obj_names = tuple(o["name"] for o in meta.get("objects", []))
     o_idx = {name: k for k, name in enumerate(obj_names)}
@@ -205,8 +256,9 @@ def load_ground_truth(recording_dir: Path) -> GroundTruth:
     held = np.full((len(frames), len(obj_names)), "", dtype=object)
     for r in obj_rows:
         if r["object"] not in o_idx:
-            raise InputError(f"{directory / 'objects.csv'}: object {r['object']!r} is not "
-                             f"listed in scene.json")
+            raise InputError(
+                f"{directory / 'objects.csv'}: object {r['object']!r} is not listed in scene.json"
+            )
         i, k = f_idx[int(r["frame"])], o_idx[r["object"]]
         obj_pos[i, k] = float(r["x_m"]), float(r["y_m"]), float(r["z_m"])
         held[i, k] = r["held_by"]
@@ -219,8 +271,18 @@ def load_ground_truth(recording_dir: Path) -> GroundTruth:
             raise InputError(f"{events_path}: not valid JSON: {exc}") from None
         events = tuple(event_from_dict(d, str(events_path)) for d in raw)
     return GroundTruth(
-        frames=frames, t_ns=t_ns, labels=tuple(labels), cameras=cameras, positions_m=pos,
-        visible=vis, object_names=obj_names,
-        object_hue_deg=np.array([o.get("hue_deg", np.nan) for o in meta.get("objects", [])],
-                                dtype=np.float64),
-        object_positions_m=obj_pos, held_by=held, events=events, meta=meta)
+        frames=frames,
+        t_ns=t_ns,
+        labels=tuple(labels),
+        cameras=cameras,
+        positions_m=pos,
+        visible=vis,
+        object_names=obj_names,
+        object_hue_deg=np.array(
+            [o.get("hue_deg", np.nan) for o in meta.get("objects", [])], dtype=np.float64
+        ),
+        object_positions_m=obj_pos,
+        held_by=held,
+        events=events,
+        meta=meta,
+    )

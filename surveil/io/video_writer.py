@@ -15,8 +15,15 @@ class FrameWriter:
     an image folder ``<name>/000000.jpg|png``, and their timestamps to ``<name>.csv``
     (header ``frame,timestamp_ns``, as formats.md says)."""
 
-    def __init__(self, directory: Path, name: str, compression: str, fps: float,
-                 size: tuple[int, int], jpeg_quality: int = 85) -> None:
+    def __init__(
+        self,
+        directory: Path,
+        name: str,
+        compression: str,
+        fps: float,
+        size: tuple[int, int],
+        jpeg_quality: int = 85,
+    ) -> None:
         self.directory = Path(directory)
         self.name = name
         self.compression = compression
@@ -26,11 +33,14 @@ class FrameWriter:
         self._video: cv2.VideoWriter | None = None
         if compression == "mp4v":
             self.video_name = f"{name}.mp4"
-            self._video = cv2.VideoWriter(str(self.directory / self.video_name),
-                                          cv2.VideoWriter_fourcc(*"mp4v"), fps, size)
+            self._video = cv2.VideoWriter(
+                str(self.directory / self.video_name), cv2.VideoWriter_fourcc(*"mp4v"), fps, size
+            )
             if not self._video.isOpened():
-                raise InputError(f"{self.directory / self.video_name}: OpenCV cannot write "
-                                 f"mp4v video here; use effects.compression = 'jpeg'")
+                raise InputError(
+                    f"{self.directory / self.video_name}: OpenCV cannot write "
+                    f"mp4v video here; use effects.compression = 'jpeg'"
+                )
         else:
             self.video_name = name
             (self.directory / name).mkdir(parents=True, exist_ok=True)
@@ -39,13 +49,17 @@ class FrameWriter:
 
     def write(self, image: np.ndarray, timestamp_ns: int) -> None:
         if image.shape[1::-1] != self.size:
-            raise ValueError(f"camera {self.name}: frame size {image.shape[1::-1]} differs "
-                             f"from {self.size}")
+            raise ValueError(
+                f"camera {self.name}: frame size {image.shape[1::-1]} differs from {self.size}"
+            )
         if self._video is not None:
             self._video.write(image)
         elif self.compression == "jpeg":
-            cv2.imwrite(str(self.directory / self.name / f"{self.n:06d}.jpg"), image,
-                        [cv2.IMWRITE_JPEG_QUALITY, self.jpeg_quality])
+            cv2.imwrite(
+                str(self.directory / self.name / f"{self.n:06d}.jpg"),
+                image,
+                [cv2.IMWRITE_JPEG_QUALITY, self.jpeg_quality],
+            )
         else:
             cv2.imwrite(str(self.directory / self.name / f"{self.n:06d}.png"), image)
         self._csv.write(f"{self.n},{int(timestamp_ns)}\n")

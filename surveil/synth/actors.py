@@ -182,8 +182,16 @@ class Ellipsoid:
 
 
 def segment_ellipsoid(
-    a: np.ndarray, b: np.ndarray, radius_m: float, albedo: np.ndarray, mask_class: int,
-    person: int, part: int, *, overlap: float = 1.08, side: np.ndarray | None = None,
+    a: np.ndarray,
+    b: np.ndarray,
+    radius_m: float,
+    albedo: np.ndarray,
+    mask_class: int,
+    person: int,
+    part: int,
+    *,
+    overlap: float = 1.08,
+    side: np.ndarray | None = None,
     flat: float = 1.0,
 ) -> Ellipsoid:
     """An elongated ellipsoid spanning segment a-b (slightly longer so joints close)."""
@@ -194,9 +202,15 @@ def segment_ellipsoid(
     v = ref - np.dot(ref, u) * u
     v /= np.linalg.norm(v)
     w = np.cross(u, v)
-    return Ellipsoid(0.5 * (a + b), np.column_stack([u, v, w]),
-                     np.array([0.5 * length * overlap, radius_m, radius_m * flat]), albedo,
-                     mask_class, person, part)
+    return Ellipsoid(
+        0.5 * (a + b),
+        np.column_stack([u, v, w]),
+        np.array([0.5 * length * overlap, radius_m, radius_m * flat]),
+        albedo,
+        mask_class,
+        person,
+        part,
+    )
 
 
 @dataclass(frozen=True, slots=True)
@@ -217,8 +231,14 @@ class Pose:
 
 
 def solve_pose(
-    shape: BodyShape, root_m: np.ndarray, yaw_rad: float, hand_targets_m: np.ndarray,
-    *, gait_phase: float = 0.0, gait_amp: float = 0.0, head_offset_m: np.ndarray | None = None,
+    shape: BodyShape,
+    root_m: np.ndarray,
+    yaw_rad: float,
+    hand_targets_m: np.ndarray,
+    *,
+    gait_phase: float = 0.0,
+    gait_amp: float = 0.0,
+    head_offset_m: np.ndarray | None = None,
 ) -> Pose:
     """Pose a person: root, facing, and targets (2, 3) for the left and right hand centres.
 
@@ -229,14 +249,22 @@ def solve_pose(
     head = root + UP * shape.head_centre_height_m + 0.02 * fwd
     if head_offset_m is not None:
         head = head + head_offset_m
-    shoulders = np.stack([root + UP * shape.shoulder_height_m + s * shape.shoulder_half_width_m
-                          * left - 0.01 * fwd for s in (1.0, -1.0)])
+    shoulders = np.stack(
+        [
+            root
+            + UP * shape.shoulder_height_m
+            + s * shape.shoulder_half_width_m * left
+            - 0.01 * fwd
+            for s in (1.0, -1.0)
+        ]
+    )
     hand_part = 0.5 * shape.hand_length_m
     elbows, wrists, hands, axes = [], [], [], []
     for i, side in enumerate((1.0, -1.0)):
         pole = -UP * 1.0 + side * left * 0.6 - fwd * 0.35
-        elbow, hand = two_bone_ik(shoulders[i], hand_targets_m[i], shape.upper_arm_m,
-                                  shape.forearm_m + hand_part, pole)
+        elbow, hand = two_bone_ik(
+            shoulders[i], hand_targets_m[i], shape.upper_arm_m, shape.forearm_m + hand_part, pole
+        )
         along = hand - elbow
         along /= np.linalg.norm(along)
         wrist = hand - hand_part * along
@@ -249,46 +277,68 @@ def solve_pose(
         wrists.append(wrist)
         hands.append(hand)
         axes.append(np.column_stack([along, np.cross(normal, along), normal]))
-    hips = np.stack([root + UP * shape.hip_height_m + s * shape.hip_half_width_m * left
-                     for s in (1.0, -1.0)])
+    hips = np.stack(
+        [root + UP * shape.hip_height_m + s * shape.hip_half_width_m * left for s in (1.0, -1.0)]
+    )
     feet, knees = [], []
     for i, side in enumerate((1.0, -1.0)):
         swing = gait_amp * np.sin(gait_phase + (0.0 if side > 0 else np.pi))
-        lift = gait_amp * 0.07 * max(0.0, np.sin(gait_phase + (0.0 if side > 0 else np.pi)
-                                              + np.pi / 2))
-        ankle = (root + side * shape.hip_half_width_m * left + 0.28 * swing * fwd
-                 + UP * (0.045 * shape.height_m + lift))
+        lift = (
+            gait_amp
+            * 0.07
+            * max(0.0, np.sin(gait_phase + (0.0 if side > 0 else np.pi) + np.pi / 2))
+        )
+        ankle = (
+            root
+            + side * shape.hip_half_width_m * left
+            + 0.28 * swing * fwd
+            + UP * (0.045 * shape.height_m + lift)
+        )
         knee, ankle = two_bone_ik(hips[i], ankle, shape.thigh_m, shape.shin_m, fwd)
         feet.append(ankle)
         knees.append(knee)
-    return Pose(root, yaw_rad, np.stack(hands), np.stack(elbows), np.stack(wrists),
-                shoulders, head, np.stack(feet), np.stack(knees), hips, np.stack(axes))
+    return Pose(
+        root,
+        yaw_rad,
+        np.stack(hands),
+        np.stack(elbows),
+        np.stack(wrists),
+        shoulders,
+        head,
+        np.stack(feet),
+        np.stack(knees),
+        hips,
+        np.stack(axes),
+    )
 
 
-def rest_hand_targets(shape: BodyShape, root_m: np.ndarray, yaw_rad: float,
-                      swing: float = 0.0) -> np.ndarray:
+def rest_hand_targets(
+    shape: BodyShape, root_m: np.ndarray, yaw_rad: float, swing: float = 0.0
+) -> np.ndarray:
     """(2, 3) hand centres hanging at the sides; ``swing`` in [-1, 1] swings the arms."""
     fwd, left = body_axes(yaw_rad)
     drop = 0.96 * shape.arm_reach_m
     out = []
     for side, sgn in ((1.0, 1.0), (-1.0, -1.0)):
-        shoulder = root_m + UP * shape.shoulder_height_m + side * shape.shoulder_half_width_m \
-            * left
-        out.append(shoulder - UP * drop + side * 0.07 * left + (0.03 + 0.16 * swing * sgn)
-                   * fwd)
+        shoulder = (
+            root_m + UP * shape.shoulder_height_m + side * shape.shoulder_half_width_m * left
+        )
+        out.append(shoulder - UP * drop + side * 0.07 * left + (0.03 + 0.16 * swing * sgn) * fwd)
     return np.stack(out)
 
 
-def carry_hand_target(shape: BodyShape, root_m: np.ndarray, yaw_rad: float,
-                      side: float) -> np.ndarray:
+def carry_hand_target(
+    shape: BodyShape, root_m: np.ndarray, yaw_rad: float, side: float
+) -> np.ndarray:
     """(3,) hand centre holding an object in front of the body, forearm forward."""
     fwd, left = body_axes(yaw_rad)
     shoulder = root_m + UP * shape.shoulder_height_m + side * shape.shoulder_half_width_m * left
     return shoulder + 0.30 * fwd - 0.36 * UP * shape.height_m / 1.75 + side * 0.03 * left
 
 
-def body_primitives(shape: BodyShape, look: Appearance, pose: Pose,
-                    person: int) -> list[Ellipsoid]:
+def body_primitives(
+    shape: BodyShape, look: Appearance, pose: Pose, person: int
+) -> list[Ellipsoid]:
     """The ellipsoids of one posed person, with ground-truth mask codes."""
     from surveil.io.ground_truth import MaskClass  # codes only; no I/O
 
@@ -298,43 +348,133 @@ def body_primitives(shape: BodyShape, look: Appearance, pose: Pose,
     SKIN, HAIR, CLOTH = int(MaskClass.SKIN), int(MaskClass.HAIR), int(MaskClass.CLOTHING)
     body_axes_m = np.column_stack([left, fwd, UP])
     prims = [
-        Ellipsoid(pose.head_m, body_axes_m, shape.head_radii_m, look.skin, SKIN, person,
-                  Part.HEAD),
+        Ellipsoid(
+            pose.head_m, body_axes_m, shape.head_radii_m, look.skin, SKIN, person, Part.HEAD
+        ),
         # hair: a slightly larger cap behind and above the face
-        Ellipsoid(pose.head_m - 0.022 * s * fwd + 0.022 * s * UP, body_axes_m,
-                  shape.head_radii_m * np.array([1.07, 0.97, 0.93]), look.hair, HAIR, person,
-                  Part.HAIR),
-        Ellipsoid(root + UP * (0.855 * shape.height_m), body_axes_m,
-                  np.array([0.052, 0.052, 0.07]) * s, look.skin, SKIN, person, Part.NECK),
-        Ellipsoid(root + UP * (0.69 * shape.height_m), body_axes_m,
-                  np.array([0.17, 0.11, 0.24]) * s, look.shirt, CLOTH, person, Part.TORSO),
-        Ellipsoid(root + UP * (shape.shoulder_height_m - 0.04 * s), body_axes_m,
-                  np.array([0.205, 0.10, 0.075]) * s, look.shirt, CLOTH, person, Part.TORSO),
-        Ellipsoid(root + UP * (0.54 * shape.height_m), body_axes_m,
-                  np.array([0.165, 0.11, 0.13]) * s, look.trousers, CLOTH, person,
-                  Part.PELVIS),
+        Ellipsoid(
+            pose.head_m - 0.022 * s * fwd + 0.022 * s * UP,
+            body_axes_m,
+            shape.head_radii_m * np.array([1.07, 0.97, 0.93]),
+            look.hair,
+            HAIR,
+            person,
+            Part.HAIR,
+        ),
+        Ellipsoid(
+            root + UP * (0.855 * shape.height_m),
+            body_axes_m,
+            np.array([0.052, 0.052, 0.07]) * s,
+            look.skin,
+            SKIN,
+            person,
+            Part.NECK,
+        ),
+        Ellipsoid(
+            root + UP * (0.69 * shape.height_m),
+            body_axes_m,
+            np.array([0.17, 0.11, 0.24]) * s,
+            look.shirt,
+            CLOTH,
+            person,
+            Part.TORSO,
+        ),
+        Ellipsoid(
+            root + UP * (shape.shoulder_height_m - 0.04 * s),
+            body_axes_m,
+            np.array([0.205, 0.10, 0.075]) * s,
+            look.shirt,
+            CLOTH,
+            person,
+            Part.TORSO,
+        ),
+        Ellipsoid(
+            root + UP * (0.54 * shape.height_m),
+            body_axes_m,
+            np.array([0.165, 0.11, 0.13]) * s,
+            look.trousers,
+            CLOTH,
+            person,
+            Part.PELVIS,
+        ),
     ]
-    fore_colour, fore_class = ((look.shirt, CLOTH) if look.long_sleeves else (look.skin, SKIN))
-    for i, (ua, fa, hp, th, sh, ft) in enumerate((
-            (Part.LEFT_UPPER_ARM, Part.LEFT_FOREARM, Part.LEFT_HAND, Part.LEFT_THIGH,
-             Part.LEFT_SHIN, Part.LEFT_FOOT),
-            (Part.RIGHT_UPPER_ARM, Part.RIGHT_FOREARM, Part.RIGHT_HAND, Part.RIGHT_THIGH,
-             Part.RIGHT_SHIN, Part.RIGHT_FOOT))):
-        prims.append(segment_ellipsoid(pose.shoulders_m[i], pose.elbows_m[i], 0.052 * s,
-                                       look.shirt, CLOTH, person, ua))
+    fore_colour, fore_class = (look.shirt, CLOTH) if look.long_sleeves else (look.skin, SKIN)
+    for i, (ua, fa, hp, th, sh, ft) in enumerate(
+        (
+            (
+                Part.LEFT_UPPER_ARM,
+                Part.LEFT_FOREARM,
+                Part.LEFT_HAND,
+                Part.LEFT_THIGH,
+                Part.LEFT_SHIN,
+                Part.LEFT_FOOT,
+            ),
+            (
+                Part.RIGHT_UPPER_ARM,
+                Part.RIGHT_FOREARM,
+                Part.RIGHT_HAND,
+                Part.RIGHT_THIGH,
+                Part.RIGHT_SHIN,
+                Part.RIGHT_FOOT,
+            ),
+        )
+    ):
+        prims.append(
+            segment_ellipsoid(
+                pose.shoulders_m[i], pose.elbows_m[i], 0.052 * s, look.shirt, CLOTH, person, ua
+            )
+        )
         wrist_end = pose.wrists_m[i] - 0.012 * (pose.wrists_m[i] - pose.elbows_m[i])
-        prims.append(segment_ellipsoid(pose.elbows_m[i], wrist_end, 0.042 * s, fore_colour,
-                                       fore_class, person, fa, overlap=1.0))
+        prims.append(
+            segment_ellipsoid(
+                pose.elbows_m[i],
+                wrist_end,
+                0.042 * s,
+                fore_colour,
+                fore_class,
+                person,
+                fa,
+                overlap=1.0,
+            )
+        )
         ax = pose.hand_axes[i]
-        prims.append(Ellipsoid(pose.hands_m[i], ax,
-                               np.array([0.5 * shape.hand_length_m, 0.5 * shape.hand_width_m,
-                                         0.5 * shape.hand_thickness_m]),
-                               look.skin, SKIN, person, hp))
-        prims.append(segment_ellipsoid(pose.hips_m[i], pose.knees_m[i], 0.075 * s,
-                                       look.trousers, CLOTH, person, th))
-        prims.append(segment_ellipsoid(pose.knees_m[i], pose.feet_m[i], 0.055 * s,
-                                       look.trousers, CLOTH, person, sh))
+        prims.append(
+            Ellipsoid(
+                pose.hands_m[i],
+                ax,
+                np.array(
+                    [
+                        0.5 * shape.hand_length_m,
+                        0.5 * shape.hand_width_m,
+                        0.5 * shape.hand_thickness_m,
+                    ]
+                ),
+                look.skin,
+                SKIN,
+                person,
+                hp,
+            )
+        )
+        prims.append(
+            segment_ellipsoid(
+                pose.hips_m[i], pose.knees_m[i], 0.075 * s, look.trousers, CLOTH, person, th
+            )
+        )
+        prims.append(
+            segment_ellipsoid(
+                pose.knees_m[i], pose.feet_m[i], 0.055 * s, look.trousers, CLOTH, person, sh
+            )
+        )
         foot_c = pose.feet_m[i] + 0.06 * s * fwd - UP * 0.015
-        prims.append(Ellipsoid(foot_c, body_axes_m, np.array([0.045, 0.13, 0.04]) * s,
-                               look.shoes, CLOTH, person, ft))
+        prims.append(
+            Ellipsoid(
+                foot_c,
+                body_axes_m,
+                np.array([0.045, 0.13, 0.04]) * s,
+                look.shoes,
+                CLOTH,
+                person,
+                ft,
+            )
+        )
     return prims

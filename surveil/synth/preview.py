@@ -10,12 +10,12 @@ from surveil.camera import Rig
 from surveil.io.ground_truth import GroundTruth
 
 TILE_W = 320
-LIMB_COLOURS = {"head": (255, 255, 255), "left_hand": (60, 220, 60),
-                "right_hand": (40, 40, 240)}
+LIMB_COLOURS = {"head": (255, 255, 255), "left_hand": (60, 220, 60), "right_hand": (40, 40, 240)}
 
 
-def contact_sheet(images: dict[int, dict[str, np.ndarray]], gt: GroundTruth, rig: Rig,
-                  title: str) -> np.ndarray:
+def contact_sheet(
+    images: dict[int, dict[str, np.ndarray]], gt: GroundTruth, rig: Rig, title: str
+) -> np.ndarray:
     """(H, W, 3) uint8 grid: one row per frame in ``images``, one column per camera.
 
     Each tile shows the rendered frame with the true heads and hands as rings (white head,
@@ -32,8 +32,16 @@ def contact_sheet(images: dict[int, dict[str, np.ndarray]], gt: GroundTruth, rig
             img = images[k].get(name)
             if img is None:
                 tile = np.full((tile_h, TILE_W, 3), 40, np.uint8)
-                cv2.putText(tile, "dropped", (TILE_W // 3, tile_h // 2),
-                            cv2.FONT_HERSHEY_SIMPLEX, 0.6, (200, 200, 200), 1, cv2.LINE_AA)
+                cv2.putText(
+                    tile,
+                    "dropped",
+                    (TILE_W // 3, tile_h // 2),
+                    cv2.FONT_HERSHEY_SIMPLEX,
+                    0.6,
+                    (200, 200, 200),
+                    1,
+                    cv2.LINE_AA,
+                )
             else:
                 tile = cv2.resize(img, (TILE_W, tile_h), interpolation=cv2.INTER_AREA)
                 i = int(np.searchsorted(gt.frames, k))
@@ -49,15 +57,39 @@ def contact_sheet(images: dict[int, dict[str, np.ndarray]], gt: GroundTruth, rig
                     else:
                         cv2.circle(tile, centre, 2, colour, -1, cv2.LINE_AA)
             t_s = k / gt.fps
-            cv2.putText(tile, f"{name}  t={t_s:.2f}s", (6, 16), cv2.FONT_HERSHEY_SIMPLEX, 0.45,
-                        (0, 0, 0), 3, cv2.LINE_AA)
-            cv2.putText(tile, f"{name}  t={t_s:.2f}s", (6, 16), cv2.FONT_HERSHEY_SIMPLEX, 0.45,
-                        (255, 255, 255), 1, cv2.LINE_AA)
+            cv2.putText(
+                tile,
+                f"{name}  t={t_s:.2f}s",
+                (6, 16),
+                cv2.FONT_HERSHEY_SIMPLEX,
+                0.45,
+                (0, 0, 0),
+                3,
+                cv2.LINE_AA,
+            )
+            cv2.putText(
+                tile,
+                f"{name}  t={t_s:.2f}s",
+                (6, 16),
+                cv2.FONT_HERSHEY_SIMPLEX,
+                0.45,
+                (255, 255, 255),
+                1,
+                cv2.LINE_AA,
+            )
             tiles.append(tile)
         rows.append(np.hstack(tiles))
     sheet = np.vstack(rows) if rows else np.zeros((tile_h, TILE_W * len(cams), 3), np.uint8)
     header = np.full((28, sheet.shape[1], 3), 30, np.uint8)
-    cv2.putText(header, f"{title}: rings = true head (white), left hand (green), right hand "
-                f"(red); dots = occluded", (8, 19), cv2.FONT_HERSHEY_SIMPLEX, 0.5,
-                (230, 230, 230), 1, cv2.LINE_AA)
+    cv2.putText(
+        header,
+        f"{title}: rings = true head (white), left hand (green), right hand "
+        f"(red); dots = occluded",
+        (8, 19),
+        cv2.FONT_HERSHEY_SIMPLEX,
+        0.5,
+        (230, 230, 230),
+        1,
+        cv2.LINE_AA,
+    )
     return np.vstack([header, sheet])

@@ -51,19 +51,30 @@ def furniture_boxes(spec: FurnitureSpec) -> list[StaticBox]:
     sx, sy, h = spec.size_m
     yaw = float(np.radians(spec.yaw_deg))
     if spec.kind == "cabinet":
-        return [StaticBox(np.array([cx, cy, h / 2]), np.array([sx / 2, sy / 2, h / 2]), yaw,
-                          albedo, cls)]
+        return [
+            StaticBox(
+                np.array([cx, cy, h / 2]), np.array([sx / 2, sy / 2, h / 2]), yaw, albedo, cls
+            )
+        ]
     top = 0.035
-    boxes = [StaticBox(np.array([cx, cy, h - top / 2]), np.array([sx / 2, sy / 2, top / 2]),
-                       yaw, albedo, cls)]
+    boxes = [
+        StaticBox(
+            np.array([cx, cy, h - top / 2]), np.array([sx / 2, sy / 2, top / 2]), yaw, albedo, cls
+        )
+    ]
     c, s = np.cos(yaw), np.sin(yaw)
     for dx in (-1, 1):
         for dy in (-1, 1):
             lx, ly = dx * (sx / 2 - 0.05), dy * (sy / 2 - 0.05)
-            boxes.append(StaticBox(np.array([cx + c * lx - s * ly, cy + s * lx + c * ly,
-                                             (h - top) / 2]),
-                                   np.array([0.025, 0.025, (h - top) / 2]), yaw, albedo * 0.8,
-                                   cls))
+            boxes.append(
+                StaticBox(
+                    np.array([cx + c * lx - s * ly, cy + s * lx + c * ly, (h - top) / 2]),
+                    np.array([0.025, 0.025, (h - top) / 2]),
+                    yaw,
+                    albedo * 0.8,
+                    cls,
+                )
+            )
     return boxes
 
 
@@ -72,7 +83,8 @@ def _hash01(*ints: np.ndarray) -> np.ndarray:
     h = np.zeros(np.broadcast(*ints).shape, dtype=np.uint64)
     for k, v in enumerate(ints):
         h ^= (v.astype(np.int64).astype(np.uint64) + np.uint64(0x9E3779B9 + k)) * np.uint64(
-            0x85EBCA6B)
+            0x85EBCA6B
+        )
         h ^= h >> np.uint64(13)
         h *= np.uint64(0xC2B2AE35)
         h ^= h >> np.uint64(16)
@@ -107,8 +119,14 @@ def lamp_falloff(points_m: np.ndarray, room: RoomSpec) -> np.ndarray:
 class CameraRenderer:
     """Renders frames of one camera. Stateful only in its precomputed buffers."""
 
-    def __init__(self, cam: Camera, room: RoomSpec, furniture: list[FurnitureSpec],
-                 effects: EffectsSpec, rng: np.random.Generator) -> None:
+    def __init__(
+        self,
+        cam: Camera,
+        room: RoomSpec,
+        furniture: list[FurnitureSpec],
+        effects: EffectsSpec,
+        rng: np.random.Generator,
+    ) -> None:
         self.cam = cam
         self.room = room
         self.effects = effects
@@ -127,8 +145,9 @@ class CameraRenderer:
         self.canvas_h = int(np.ceil(py.max() + self.cy + margin))
         self.map_x = (px + self.cx).reshape(H, W).astype(np.float32)
         self.map_y = (py + self.cy).reshape(H, W).astype(np.float32)
-        jj, ii = np.meshgrid(np.arange(self.canvas_w, dtype=np.float32),
-                             np.arange(self.canvas_h, dtype=np.float32))
+        jj, ii = np.meshgrid(
+            np.arange(self.canvas_w, dtype=np.float32), np.arange(self.canvas_h, dtype=np.float32)
+        )
         self.xn = (jj - np.float32(self.cx)) / np.float32(fx)
         self.yn = (ii - np.float32(self.cy)) / np.float32(fy)
         self.light_cam = (cam.R @ light_direction(room)).astype(np.float32)
@@ -156,8 +175,9 @@ class CameraRenderer:
         t = np.take_along_axis(t_axes, axis[..., None], -1)[..., 0]
         P = C + t[..., None] * d_w
         normal = np.zeros_like(P)
-        np.put_along_axis(normal, axis[..., None], -np.sign(
-            np.take_along_axis(d_w, axis[..., None], -1)), -1)
+        np.put_along_axis(
+            normal, axis[..., None], -np.sign(np.take_along_axis(d_w, axis[..., None], -1)), -1
+        )
         albedo = np.zeros_like(P, dtype=np.float32)
         cls = np.zeros(t.shape, dtype=np.uint8)
         is_floor = (axis == 2) & (d_w[..., 2] < 0)
@@ -180,10 +200,12 @@ class CameraRenderer:
                 cls[hit] = box.mask_class
                 is_floor &= ~hit
         P = C + t[..., None] * d_w
-        shade = (AMBIENT + DIFFUSE * np.clip(normal @ light_direction(room), 0, None)
-                 ) * lamp_falloff(P, room)
+        shade = (
+            AMBIENT + DIFFUSE * np.clip(normal @ light_direction(room), 0, None)
+        ) * lamp_falloff(P, room)
         self.static_colour = (albedo * shade[..., None].astype(np.float32) * 255).astype(
-            np.float32)
+            np.float32
+        )
         # rays are (xn, yn, 1) in the camera frame, so the ray parameter is the camera depth
         self.static_depth = t.astype(np.float32)
         self.static_class = cls
@@ -203,7 +225,7 @@ class CameraRenderer:
             base = np.array([0.60, 0.62, 0.63], dtype=np.float32)
             var = 0.92 + 0.12 * _hash01(ix.astype(np.int64), iy.astype(np.int64))
             fx, fy = x / tile - ix, y / tile - iy
-            grout = (np.minimum(np.minimum(fx, 1 - fx), np.minimum(fy, 1 - fy)) < 0.018)
+            grout = np.minimum(np.minimum(fx, 1 - fx), np.minimum(fy, 1 - fy)) < 0.018
             speck = 0.94 + 0.1 * _value_noise(x, y, 0.04, 3)
             out = base[None, :] * (var * speck)[:, None]
             out[grout] *= 0.55
@@ -234,14 +256,17 @@ class CameraRenderer:
         out[P[:, 2] < 0.10] = np.array([0.75, 0.76, 0.78], dtype=np.float32)
         X, Y, _ = room.size_m
         # a blue-grey door on the wall y = Y
-        door = (axis == 1) & (P[:, 1] > Y - 1e-6) & (np.abs(P[:, 0] - 0.7 * X) < 0.45) & (
-            P[:, 2] < 2.05)
+        door = (
+            (axis == 1)
+            & (P[:, 1] > Y - 1e-6)
+            & (np.abs(P[:, 0] - 0.7 * X) < 0.45)
+            & (P[:, 2] < 2.05)
+        )
         out[door] = np.array([0.55, 0.45, 0.38], dtype=np.float32)
         if room.poster:
             pu, pv = P[:, 1] - 0.45 * Y, P[:, 2] - 1.55
             poster = (axis == 0) & (P[:, 0] < 1e-6) & (np.abs(pu) < 0.5) & (np.abs(pv) < 0.35)
-            cell = (np.floor((pu + 0.5) / 0.34) + 3 * np.floor((pv + 0.35) / 0.35)).astype(
-                int)
+            cell = (np.floor((pu + 0.5) / 0.34) + 3 * np.floor((pv + 0.35) / 0.35)).astype(int)
             hues = np.array([0, 40, 100, 200, 280, 160], dtype=np.float32)
             hsv = np.zeros((len(hues), 1, 3), dtype=np.uint8)
             hsv[:, 0, 0] = hues / 2
@@ -254,12 +279,17 @@ class CameraRenderer:
 
     def _skin_panel(self, P: np.ndarray, axis: np.ndarray) -> np.ndarray:
         X, Y, _ = self.room.size_m
-        return ((axis == 0) & (P[..., 0] > X - 1e-6) & (np.abs(P[..., 1] - 0.4 * Y) < 0.45)
-                & (np.abs(P[..., 2] - 1.4) < 0.3))
+        return (
+            (axis == 0)
+            & (P[..., 0] > X - 1e-6)
+            & (np.abs(P[..., 1] - 0.4 * Y) < 0.45)
+            & (np.abs(P[..., 2] - 1.4) < 0.3)
+        )
 
     def _wall_decor_class(self, P, is_wall, axis, d_w) -> np.ndarray:
-        return is_wall & self._skin_panel(P, axis) if self.room.skin_panel else np.zeros_like(
-            is_wall)
+        return (
+            is_wall & self._skin_panel(P, axis) if self.room.skin_panel else np.zeros_like(is_wall)
+        )
 
     # -- per frame ----------------------------------------------------------------------------
 
@@ -274,12 +304,15 @@ class CameraRenderer:
             acc += np.float32(w) * np.exp(d2 * np.float32(-1 / (2 * 0.2**2)))
         factor = 1.0 - strength * np.clip(acc, 0, 1)
         factor[~self.floor_coarse_mask] = 1.0
-        return cv2.resize(factor, (self.canvas_w, self.canvas_h),
-                          interpolation=cv2.INTER_LINEAR)
+        return cv2.resize(factor, (self.canvas_w, self.canvas_h), interpolation=cv2.INTER_LINEAR)
 
-    def render(self, prims: list[Ellipsoid], shadow_casters: np.ndarray,
-               illumination: float, noise_rng: np.random.Generator
-               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def render(
+        self,
+        prims: list[Ellipsoid],
+        shadow_casters: np.ndarray,
+        illumination: float,
+        noise_rng: np.random.Generator,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Render one frame.
 
         Returns
@@ -328,28 +361,33 @@ class CameraRenderer:
             lambert = np.maximum(n0 * L[0] + n1 * L[1] + n2 * L[2], 0)
             fill = np.maximum(-(n0 * xn + n1 * yn + n2) / rn, 0)
             shade = (AMBIENT + DIFFUSE * lambert + FILL * fill) * np.float32(
-                lamp_falloff(p.centre_m, self.room) * 255)
+                lamp_falloff(p.centre_m, self.room) * 255
+            )
             csub = colour[i0:i1, j0:j1]
             csub[hit] = shade[hit][:, None] * p.albedo.astype(np.float32)[None, :]
             dsub[hit] = t[hit]
             winner[i0:i1, j0:j1][hit] = k
-        real = cv2.remap(colour, self.map_x, self.map_y, cv2.INTER_LINEAR,
-                         borderMode=cv2.BORDER_REPLICATE)
+        real = cv2.remap(
+            colour, self.map_x, self.map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
+        )
         real *= self.sensor_gain
         real *= np.float32(illumination)
         H, W = real.shape[:2]
         oy, ox = noise_rng.integers(0, H), noise_rng.integers(0, W)
-        noise = self.noise_bank[oy:oy + H, ox:ox + W]
-        sigma = np.sqrt(np.float32(self.effects.noise_sigma**2)
-                        + np.float32(self.effects.shot_noise) * np.maximum(real, 0))
+        noise = self.noise_bank[oy : oy + H, ox : ox + W]
+        sigma = np.sqrt(
+            np.float32(self.effects.noise_sigma**2)
+            + np.float32(self.effects.shot_noise) * np.maximum(real, 0)
+        )
         real += noise * sigma
         np.clip(real, 0, 255, out=real)
         return real.astype(np.uint8), winner, full_area, boxes
 
     def distort_labels(self, labels: np.ndarray) -> np.ndarray:
         """Warp a canvas label image (uint8, any channels) to the real image, nearest."""
-        return cv2.remap(labels, self.map_x, self.map_y, cv2.INTER_NEAREST,
-                         borderMode=cv2.BORDER_REPLICATE)
+        return cv2.remap(
+            labels, self.map_x, self.map_y, cv2.INTER_NEAREST, borderMode=cv2.BORDER_REPLICATE
+        )
 
     def canvas_pixel(self, points_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Canvas (col, row) integer pixels of world points and a validity mask."""
@@ -362,8 +400,9 @@ class CameraRenderer:
         return np.column_stack([np.where(ok, u, 0), np.where(ok, v, 0)]).astype(int), ok
 
 
-_CORNERS = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)],
-                    dtype=np.float64)
+_CORNERS = np.array(
+    [[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=np.float64
+)
 
 
 def _ray_ellipsoid(xn, yn, c, axes, radii):
@@ -423,8 +462,7 @@ def _ray_box(xn, yn, c, axes, half):
     return tnear, n[0], n[1], n[2], hit
 
 
-def ray_box_world(C: np.ndarray, d_w: np.ndarray, box: StaticBox
-                  ) -> tuple[np.ndarray, np.ndarray]:
+def ray_box_world(C: np.ndarray, d_w: np.ndarray, box: StaticBox) -> tuple[np.ndarray, np.ndarray]:
     """Ray parameter (inf where missed) and world normals of rays C + t d_w against a box."""
     c, s = np.cos(box.yaw_rad), np.sin(box.yaw_rad)
     Rb = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]])  # box axes (columns) in world
@@ -433,8 +471,10 @@ def ray_box_world(C: np.ndarray, d_w: np.ndarray, box: StaticBox
     with np.errstate(divide="ignore", invalid="ignore"):
         t1 = (-box.half_m - o) / d
         t2 = (box.half_m - o) / d
-    lo, hi = np.nan_to_num(np.minimum(t1, t2), nan=-np.inf), np.nan_to_num(
-        np.maximum(t1, t2), nan=np.inf)
+    lo, hi = (
+        np.nan_to_num(np.minimum(t1, t2), nan=-np.inf),
+        np.nan_to_num(np.maximum(t1, t2), nan=np.inf),
+    )
     axis = np.argmax(lo, axis=-1)
     tnear = np.take_along_axis(lo, axis[..., None], -1)[..., 0]
     tfar = hi.min(axis=-1)

@@ -15,8 +15,19 @@ import numpy as np
 from surveil.config import from_table, read_toml, setting
 from surveil.errors import ConfigError
 
-ACTIONS = ("idle", "walk_to", "turn", "clap", "handshake", "approach", "give", "pick",
-           "place", "touch_face", "wave")
+ACTIONS = (
+    "idle",
+    "walk_to",
+    "turn",
+    "clap",
+    "handshake",
+    "approach",
+    "give",
+    "pick",
+    "place",
+    "touch_face",
+    "wave",
+)
 
 SKIN_TONES_RGB = {
     "light": (232, 190, 162),
@@ -27,13 +38,27 @@ SKIN_TONES_RGB = {
     "dark": (92, 58, 40),
 }
 NAMED_RGB = {
-    "black": (28, 28, 30), "white": (235, 235, 232), "grey": (128, 128, 130),
-    "navy": (30, 40, 90), "blue": (40, 80, 170), "red": (170, 35, 40),
-    "green": (40, 120, 60), "olive": (100, 105, 50), "yellow": (210, 180, 50),
-    "orange": (220, 110, 30), "purple": (100, 50, 130), "brown": (95, 60, 35),
-    "khaki": (170, 150, 110), "denim": (60, 80, 120), "teal": (30, 120, 120),
-    "maroon": (110, 30, 40), "beige": (200, 180, 150), "charcoal": (55, 55, 60),
-    "blonde": (200, 165, 100), "auburn": (120, 55, 30), "darkbrown": (55, 35, 25),
+    "black": (28, 28, 30),
+    "white": (235, 235, 232),
+    "grey": (128, 128, 130),
+    "navy": (30, 40, 90),
+    "blue": (40, 80, 170),
+    "red": (170, 35, 40),
+    "green": (40, 120, 60),
+    "olive": (100, 105, 50),
+    "yellow": (210, 180, 50),
+    "orange": (220, 110, 30),
+    "purple": (100, 50, 130),
+    "brown": (95, 60, 35),
+    "khaki": (170, 150, 110),
+    "denim": (60, 80, 120),
+    "teal": (30, 120, 120),
+    "maroon": (110, 30, 40),
+    "beige": (200, 180, 150),
+    "charcoal": (55, 55, 60),
+    "blonde": (200, 165, 100),
+    "auburn": (120, 55, 30),
+    "darkbrown": (55, 35, 25),
     "wood": (196, 142, 100),  # a light, skin-toned wood: the deliberate distractor
 }
 
@@ -43,8 +68,10 @@ def parse_rgb(value: str | tuple, where: str, *, skin: bool = False) -> np.ndarr
     table = SKIN_TONES_RGB if skin else NAMED_RGB
     if isinstance(value, str):
         if value not in table:
-            raise ConfigError(f"{where}: unknown colour {value!r}; use [r, g, b] or one of "
-                              f"{', '.join(sorted(table))}")
+            raise ConfigError(
+                f"{where}: unknown colour {value!r}; use [r, g, b] or one of "
+                f"{', '.join(sorted(table))}"
+            )
         rgb = table[value]
     else:
         rgb = value
@@ -116,8 +143,9 @@ class ObjectSpec:
     shape: str = setting("box", "box or ball", choices=("box", "ball"))
     size_m: tuple[float, float, float] = setting((0.09, 0.07, 0.11), "extent x, y, z")
     on: str = setting("", "furniture it rests on at the start")
-    position_m: tuple[float, float] = setting((0.0, 0.0), "position on that furniture, or "
-                                              "floor position when `on` is empty")
+    position_m: tuple[float, float] = setting(
+        (0.0, 0.0), "position on that furniture, or floor position when `on` is empty"
+    )
     held_by: str = setting("", "hand holding it at the start, e.g. p1/right_hand")
 
 
@@ -135,8 +163,7 @@ class ActionSpec:
     facing_deg: float | None = setting(None, "walk_to / turn: final facing")
     towards: str = setting("", "turn: face this person")
     speed_mps: float = setting(0.9, "walk_to speed", min=0.1, max=3)
-    duration_s: float | None = setting(None, "override the action's default duration",
-                                       min=0.2)
+    duration_s: float | None = setting(None, "override the action's default duration", min=0.2)
     gap_m: float = setting(0.25, "approach: distance the hands stop apart", min=0.12)
 
 
@@ -146,26 +173,23 @@ class EffectsSpec:
 
     noise_sigma: float = setting(2.5, "sensor read noise, grey levels", min=0, max=30)
     shot_noise: float = setting(0.6, "photon noise scale (sigma^2 += k * I)", min=0, max=5)
-    compression: str = setting("mp4v", "mp4v video, jpeg or png image folders",
-                               choices=("mp4v", "jpeg", "png"))
+    compression: str = setting(
+        "mp4v", "mp4v video, jpeg or png image folders", choices=("mp4v", "jpeg", "png")
+    )
     jpeg_quality: int = setting(85, "for jpeg", min=10, max=100)
     gain_spread: float = setting(0.08, "per-camera gain sigma (relative)", min=0, max=0.5)
-    white_balance_spread: float = setting(0.05, "per-camera channel gain sigma", min=0,
-                                          max=0.3)
+    white_balance_spread: float = setting(0.05, "per-camera channel gain sigma", min=0, max=0.3)
     vignetting: float = setting(0.25, "brightness loss at the image corners", min=0, max=0.8)
-    illumination_drift: float = setting(0.06, "slow light level change amplitude", min=0,
-                                        max=0.5)
+    illumination_drift: float = setting(0.06, "slow light level change amplitude", min=0, max=0.5)
     shadows: float = setting(0.45, "strength of people's soft floor shadows", min=0, max=1)
-    calib_rotation_deg: float = setting(0.15, "written-rig rotation error sigma", min=0,
-                                        max=5)
-    calib_translation_m: float = setting(0.008, "written-rig position error sigma", min=0,
-                                         max=0.5)
-    calib_focal_rel: float = setting(0.004, "written-rig focal length error sigma", min=0,
-                                     max=0.1)
+    calib_rotation_deg: float = setting(0.15, "written-rig rotation error sigma", min=0, max=5)
+    calib_translation_m: float = setting(0.008, "written-rig position error sigma", min=0, max=0.5)
+    calib_focal_rel: float = setting(0.004, "written-rig focal length error sigma", min=0, max=0.1)
     jitter_ms: float = setting(2.0, "timestamp jitter sigma", min=0, max=30)
     drop_rate: float = setting(0.01, "probability a frame is dropped", min=0, max=0.5)
-    late_start_s: dict[str, float] = setting(default_factory=dict,
-                                             doc="camera -> seconds it starts late")
+    late_start_s: dict[str, float] = setting(
+        default_factory=dict, doc="camera -> seconds it starts late"
+    )
     mask_every: int = setting(5, "write ground-truth masks every N frames (0 = never)", min=0)
 
 
@@ -186,7 +210,7 @@ def load_scenario(path: Path) -> Scenario:
     actions) are checked too; every error names the file and the offending key."""
     path = Path(path)
     table = read_toml(path)
-    for i, action in enumerate(table.get("actions", [])):
+    for action in table.get("actions", []):
         if isinstance(action, dict) and "with" in action:
             action["partner"] = action.pop("with")
     scenario = from_table(Scenario, table, f"{path}: ")
@@ -204,35 +228,49 @@ def load_scenario(path: Path) -> Scenario:
     hands = {f"{p}/{h}_hand" for p in ids for h in ("left", "right")}
     for i, obj in enumerate(scenario.objects):
         if obj.on and obj.on not in furniture:
-            raise ConfigError(f"{path}: objects[{i}].on names unknown furniture {obj.on!r} "
-                              f"(have: {', '.join(sorted(furniture)) or 'none'})")
+            raise ConfigError(
+                f"{path}: objects[{i}].on names unknown furniture {obj.on!r} "
+                f"(have: {', '.join(sorted(furniture)) or 'none'})"
+            )
         if obj.held_by and obj.held_by not in hands:
-            raise ConfigError(f"{path}: objects[{i}].held_by must be a hand like "
-                              f"p1/right_hand, got {obj.held_by!r}")
+            raise ConfigError(
+                f"{path}: objects[{i}].held_by must be a hand like "
+                f"p1/right_hand, got {obj.held_by!r}"
+            )
     for i, act in enumerate(scenario.actions):
         key = f"{path}: actions[{i}]"
         if act.person not in ids:
-            raise ConfigError(f"{key}.person: unknown person {act.person!r} "
-                              f"(have: {', '.join(ids)})")
+            raise ConfigError(
+                f"{key}.person: unknown person {act.person!r} (have: {', '.join(ids)})"
+            )
         if act.at_s >= scenario.scene.duration_s:
-            raise ConfigError(f"{key}.at_s = {act.at_s} is after the end of the scene "
-                              f"({scenario.scene.duration_s} s)")
+            raise ConfigError(
+                f"{key}.at_s = {act.at_s} is after the end of the scene "
+                f"({scenario.scene.duration_s} s)"
+            )
         if act.do in ("handshake", "approach") and act.partner not in ids:
-            raise ConfigError(f"{key}.with: {act.do} needs another person, got "
-                              f"{act.partner!r} (have: {', '.join(ids)})")
+            raise ConfigError(
+                f"{key}.with: {act.do} needs another person, got "
+                f"{act.partner!r} (have: {', '.join(ids)})"
+            )
         if act.do == "give" and act.partner not in ids:
-            raise ConfigError(f"{key}.with: give needs the receiving person (the giver "
-                              f"itself for a hand-to-hand exchange), got {act.partner!r}")
+            raise ConfigError(
+                f"{key}.with: give needs the receiving person (the giver "
+                f"itself for a hand-to-hand exchange), got {act.partner!r}"
+            )
         if act.do in ("give", "pick", "place") and act.object not in objects:
-            raise ConfigError(f"{key}.object: {act.do} needs an object, got {act.object!r} "
-                              f"(have: {', '.join(sorted(objects)) or 'none'})")
+            raise ConfigError(
+                f"{key}.object: {act.do} needs an object, got {act.object!r} "
+                f"(have: {', '.join(sorted(objects)) or 'none'})"
+            )
         if act.do == "place" and not act.where and len(act.position_m) != 2:
             raise ConfigError(f"{key}: place needs `where` (furniture) or position_m [x, y]")
         if act.where and act.where not in furniture:
             raise ConfigError(f"{key}.where: unknown furniture {act.where!r}")
         if act.do == "walk_to" and len(act.position_m) != 2:
-            raise ConfigError(f"{key}.position_m: walk_to needs [x, y], got "
-                              f"{list(act.position_m)}")
+            raise ConfigError(
+                f"{key}.position_m: walk_to needs [x, y], got {list(act.position_m)}"
+            )
         if act.hand not in ("", "left", "right") or act.to_hand not in ("", "left", "right"):
             raise ConfigError(f"{key}.hand must be left or right")
         if act.towards and act.towards not in ids:

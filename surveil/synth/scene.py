@@ -32,10 +32,10 @@ from surveil.errors import InputError
 from surveil.io.ground_truth import GT_DIR, GroundTruth, MaskClass, write_ground_truth
 from surveil.io.video_writer import FrameWriter, write_image
 from surveil.synth.actors import Ellipsoid, Part, body_primitives
+from surveil.synth.preview import contact_sheet
 from surveil.synth.render import CameraRenderer
 from surveil.synth.scenario import Scenario, load_scenario, person_ids
 from surveil.synth.timeline import SIDES, Choreography, compile_scenario
-from surveil.synth.preview import contact_sheet
 
 log = logging.getLogger(__name__)
 
@@ -60,16 +60,21 @@ class SynthSummary:
     notes: list[str] = field(default_factory=list)
 
     def describe(self) -> str:
-        lines = [f"{'reused up-to-date' if self.reused else 'wrote'} recording {self.out_dir}"
-                 f" ({self.scenario}): {self.n_frames} frame sets, {len(self.cameras)} cameras"
-                 f", {self.n_camera_frames} camera frames"]
+        lines = [
+            f"{'reused up-to-date' if self.reused else 'wrote'} recording {self.out_dir}"
+            f" ({self.scenario}): {self.n_frames} frame sets, {len(self.cameras)} cameras"
+            f", {self.n_camera_frames} camera frames"
+        ]
         if any(self.dropped.values()):
-            lines.append("  missing frames (dropped or late start): " + ", ".join(
-                f"{c} {n}" for c, n in self.dropped.items()))
+            lines.append(
+                "  missing frames (dropped or late start): "
+                + ", ".join(f"{c} {n}" for c, n in self.dropped.items())
+            )
         for ev in self.events:
             hue = "" if ev.object_hue_deg is None else f" (object hue {ev.object_hue_deg:.0f})"
-            lines.append(f"  {ev.climax_ns / NS:6.2f} s  {ev.activity:<10} "
-                         f"{', '.join(ev.actors)}{hue}")
+            lines.append(
+                f"  {ev.climax_ns / NS:6.2f} s  {ev.activity:<10} {', '.join(ev.actors)}{hue}"
+            )
         return "\n".join(lines)
 
 
@@ -99,14 +104,21 @@ def scenario_rig(scenario: Scenario, scenario_path: Path) -> Rig:
         if not path.is_absolute():
             path = scenario_path.parent / path
         return load_rig(path)
-    return make_corner_rig(scenario.rig.n_cameras, room_m=scenario.room.size_m[:2],
-                           height_m=scenario.rig.height_m,
-                           size=(scenario.rig.width, scenario.rig.height),
-                           hfov_deg=scenario.rig.hfov_deg)
+    return make_corner_rig(
+        scenario.rig.n_cameras,
+        room_m=scenario.room.size_m[:2],
+        height_m=scenario.rig.height_m,
+        size=(scenario.rig.width, scenario.rig.height),
+        hfov_deg=scenario.rig.hfov_deg,
+    )
 
 
-def object_primitive(chor: Choreography, name: str, t: float, poses: dict,
-                     ) -> tuple[Ellipsoid, str, np.ndarray]:
+def object_primitive(
+    chor: Choreography,
+    name: str,
+    t: float,
+    poses: dict,
+) -> tuple[Ellipsoid, str, np.ndarray]:
     """The object's primitive, its holder label ('' if resting) and centre."""
     obj = chor.objects[name]
     holder, rest = obj.state(t)
@@ -118,19 +130,32 @@ def object_primitive(chor: Choreography, name: str, t: float, poses: dict,
         ax = pose.hand_axes[i]
         outward = ax[:, 2] * (1.0 if i == 0 else -1.0)
         shape = chor.actors[pid].shape
-        centre = (pose.hands_m[i] + outward * (0.5 * shape.hand_thickness_m + half[1] + 0.004)
-                  + ax[:, 0] * 0.02)
+        centre = (
+            pose.hands_m[i]
+            + outward * (0.5 * shape.hand_thickness_m + half[1] + 0.004)
+            + ax[:, 0] * 0.02
+        )
         axes = np.column_stack([ax[:, 1], ax[:, 2], ax[:, 0]])
     else:
         centre, axes = rest, np.eye(3)
     kind = 1 if obj.shape == "box" else 0
-    return (Ellipsoid(centre, axes, half, obj.albedo, int(MaskClass.OBJECT), 0,
-                      int(Part.OBJECT), kind), holder, centre)
+    return (
+        Ellipsoid(
+            centre, axes, half, obj.albedo, int(MaskClass.OBJECT), 0, int(Part.OBJECT), kind
+        ),
+        holder,
+        centre,
+    )
 
 
-def synthesise(scenario_path: Path, out_dir: Path, *, preview: bool = False,
-               overwrite: bool = False,
-               on_progress: Callable[[int, int], None] | None = None) -> SynthSummary:
+def synthesise(
+    scenario_path: Path,
+    out_dir: Path,
+    *,
+    preview: bool = False,
+    overwrite: bool = False,
+    on_progress: Callable[[int, int], None] | None = None,
+) -> SynthSummary:
     """Render ``scenario_path`` into the recording directory ``out_dir``.
 
     Raises ConfigError for a bad scenario, InputError if ``out_dir`` holds something else
@@ -139,19 +164,28 @@ def synthesise(scenario_path: Path, out_dir: Path, *, preview: bool = False,
     scenario_path = Path(scenario_path)
     out_dir = Path(out_dir)
     scenario = load_scenario(scenario_path)
-    digest = hashlib.sha256(scenario_path.read_bytes()
-                            + f"v{GENERATOR_VERSION}".encode()).hexdigest()
+    digest = hashlib.sha256(
+        scenario_path.read_bytes() + f"v{GENERATOR_VERSION}".encode()
+    ).hexdigest()
     stamp = out_dir / GT_DIR / "scenario.sha256"
     if out_dir.exists():
-        if stamp.is_file() and stamp.read_text().strip() == digest and not overwrite and (
-                not preview or (out_dir / "preview.png").is_file()):
+        if (
+            stamp.is_file()
+            and stamp.read_text().strip() == digest
+            and not overwrite
+            and (not preview or (out_dir / "preview.png").is_file())
+        ):
             return _existing_summary(out_dir, scenario)
         if not overwrite and any(out_dir.iterdir()):
             if not stamp.is_file():
-                raise InputError(f"{out_dir} exists and is not a recording made by `surveil "
-                                 f"synth`; choose another --out or delete it")
-            raise InputError(f"{out_dir} holds an older rendering of a different scenario "
-                             f"version; pass --force to replace it")
+                raise InputError(
+                    f"{out_dir} exists and is not a recording made by `surveil "
+                    f"synth`; choose another --out or delete it"
+                )
+            raise InputError(
+                f"{out_dir} holds an older rendering of a different scenario "
+                f"version; pass --force to replace it"
+            )
     out_dir.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}-", dir=out_dir.parent))
     try:
@@ -171,19 +205,32 @@ def _existing_summary(out_dir: Path, scenario: Scenario) -> SynthSummary:
     from surveil.io.ground_truth import load_ground_truth
 
     gt = load_ground_truth(out_dir)
-    return SynthSummary(out_dir, scenario.scene.name, len(gt.frames), gt.cameras,
-                        int(gt.meta.get("n_camera_frames", 0)),
-                        dict(gt.meta.get("missing_frames", {})), gt.events, reused=True)
+    return SynthSummary(
+        out_dir,
+        scenario.scene.name,
+        len(gt.frames),
+        gt.cameras,
+        int(gt.meta.get("n_camera_frames", 0)),
+        dict(gt.meta.get("missing_frames", {})),
+        gt.events,
+        reused=True,
+    )
 
 
-def _render(scenario: Scenario, scenario_path: Path, out: Path, preview: bool,
-            on_progress: Callable[[int, int], None] | None) -> SynthSummary:
+def _render(
+    scenario: Scenario,
+    scenario_path: Path,
+    out: Path,
+    preview: bool,
+    on_progress: Callable[[int, int], None] | None,
+) -> SynthSummary:
     from surveil.io.calibration import save_rig
 
     t_start = time.perf_counter()
     seed_seq = np.random.SeedSequence(scenario.scene.seed)
     rng_chor, rng_rig, rng_render, rng_time, rng_noise = (
-        np.random.default_rng(s) for s in seed_seq.spawn(5))
+        np.random.default_rng(s) for s in seed_seq.spawn(5)
+    )
     true_rig = scenario_rig(scenario, scenario_path)
     written_rig = perturb_rig(true_rig, scenario, rng_rig)
     chor = compile_scenario(scenario, rng_chor)
@@ -194,23 +241,33 @@ def _render(scenario: Scenario, scenario_path: Path, out: Path, preview: bool,
     for cam_name in eff.late_start_s:
         if cam_name not in true_rig:
             from surveil.errors import ConfigError
-            raise ConfigError(f"{scenario_path}: effects.late_start_s names unknown camera "
-                              f"{cam_name!r} (rig: {', '.join(true_rig.names)})")
-    renderers = {cam.name: CameraRenderer(cam, scenario.room, list(scenario.furniture), eff,
-                                          rng_render) for cam in true_rig}
+
+            raise ConfigError(
+                f"{scenario_path}: effects.late_start_s names unknown camera "
+                f"{cam_name!r} (rig: {', '.join(true_rig.names)})"
+            )
+    renderers = {
+        cam.name: CameraRenderer(cam, scenario.room, list(scenario.furniture), eff, rng_render)
+        for cam in true_rig
+    }
     # which camera frames exist, and their recorded timestamps
     cams = true_rig.names
     exists = rng_time.random((n_frames, len(cams))) >= eff.drop_rate
     times = np.arange(n_frames) / fps
     for c, name in enumerate(cams):
         exists[times < eff.late_start_s.get(name, 0.0), c] = False
-    jitter = np.clip(rng_time.normal(0, eff.jitter_ms * 1e6, exists.shape),
-                     -0.3 * period_ns, 0.3 * period_ns)
+    jitter = np.clip(
+        rng_time.normal(0, eff.jitter_ms * 1e6, exists.shape), -0.3 * period_ns, 0.3 * period_ns
+    )
     stamps = np.round(np.arange(n_frames)[:, None] * period_ns + jitter).astype(np.int64)
     stamps = np.maximum(stamps, 0)
 
-    writers = {name: FrameWriter(out, name, eff.compression, fps, renderers[name].cam.size,
-                                 eff.jpeg_quality) for name in cams}
+    writers = {
+        name: FrameWriter(
+            out, name, eff.compression, fps, renderers[name].cam.size, eff.jpeg_quality
+        )
+        for name in cams
+    }
     ids = person_ids(scenario)
     labels = [f"{pid}/{limb}" for pid in ids for limb in LIMBS]
     positions = np.full((n_frames, len(labels), 3), np.nan)
@@ -242,8 +299,10 @@ def _render(scenario: Scenario, scenario_path: Path, out: Path, preview: bool,
             body = body_primitives(actor.shape, actor.look, pose, actor.number)
             prims.extend(body)
             parts = [int(p.part) for p in body]
-            limb_prims[f"{pid}/head"] = [base + parts.index(Part.HEAD),
-                                         base + parts.index(Part.HAIR)]
+            limb_prims[f"{pid}/head"] = [
+                base + parts.index(Part.HEAD),
+                base + parts.index(Part.HAIR),
+            ]
             limb_prims[f"{pid}/left_hand"] = [base + parts.index(Part.LEFT_HAND)]
             limb_prims[f"{pid}/right_hand"] = [base + parts.index(Part.RIGHT_HAND)]
             j = labels.index(f"{pid}/head")
@@ -259,14 +318,16 @@ def _render(scenario: Scenario, scenario_path: Path, out: Path, preview: bool,
             obj_pos[k, o] = centre
             held[k, o] = holder
         illumination = 1.0 + eff.illumination_drift * (
-            np.sin(2 * np.pi * t / 23.0 + 1.0) + 0.5 * np.sin(2 * np.pi * t / 7.3))
+            np.sin(2 * np.pi * t / 23.0 + 1.0) + 0.5 * np.sin(2 * np.pi * t / 7.3)
+        )
         write_mask = eff.mask_every > 0 and k % eff.mask_every == 0
         for c, name in enumerate(cams):
             if not exists[k, c]:
                 continue
             r = renderers[name]
-            image, winner, full_area, boxes = r.render(prims, np.array(casters), illumination,
-                                                rng_noise)
+            image, winner, full_area, boxes = r.render(
+                prims, np.array(casters), illumination, rng_noise
+            )
             writers[name].write(image, int(stamps[k, c]))
             # visible: the limb's centre is in the image and not occluded, and at least
             # MIN_VISIBLE_FRACTION of the area it would cover unoccluded shows
@@ -301,30 +362,66 @@ def _render(scenario: Scenario, scenario_path: Path, out: Path, preview: bool,
     save_rig(true_rig, out / GT_DIR / "rig_true.yaml")
     _write_recording_toml(out, scenario, cams, writers)
     meta = {
-        "scenario": scenario.scene.name, "fps": fps, "seed": scenario.scene.seed,
-        "generator_version": GENERATOR_VERSION, "n_camera_frames": n_camera_frames,
-        "missing_frames": missing, "mask_every": eff.mask_every,
+        "scenario": scenario.scene.name,
+        "fps": fps,
+        "seed": scenario.scene.seed,
+        "generator_version": GENERATOR_VERSION,
+        "n_camera_frames": n_camera_frames,
+        "missing_frames": missing,
+        "mask_every": eff.mask_every,
         "min_visible_fraction": MIN_VISIBLE_FRACTION,
-        "persons": [{"id": pid, "height_m": p.height_m, "skin": p.skin, "shirt": p.shirt,
-                     "sleeves": p.sleeves} for pid, p in zip(ids, scenario.people)],
-        "objects": [{"name": n, "hue_deg": chor.objects[n].hue_deg,
-                     "shape": chor.objects[n].shape} for n in obj_names],
+        "persons": [
+            {
+                "id": pid,
+                "height_m": p.height_m,
+                "skin": p.skin,
+                "shirt": p.shirt,
+                "sleeves": p.sleeves,
+            }
+            for pid, p in zip(ids, scenario.people, strict=False)
+        ],
+        "objects": [
+            {"name": n, "hue_deg": chor.objects[n].hue_deg, "shape": chor.objects[n].shape}
+            for n in obj_names
+        ],
         "render_ms_per_camera_frame": round(1000 * render_s / max(n_camera_frames, 1), 2),
     }
     gt = GroundTruth(
-        frames=np.arange(n_frames), t_ns=np.round(times * NS).astype(np.int64),
-        labels=tuple(labels), cameras=cams, positions_m=positions, visible=visible,
+        frames=np.arange(n_frames),
+        t_ns=np.round(times * NS).astype(np.int64),
+        labels=tuple(labels),
+        cameras=cams,
+        positions_m=positions,
+        visible=visible,
         object_names=obj_names,
         object_hue_deg=np.array([chor.objects[n].hue_deg for n in obj_names]),
-        object_positions_m=obj_pos, held_by=held, events=tuple(chor.events), meta=meta)
+        object_positions_m=obj_pos,
+        held_by=held,
+        events=tuple(chor.events),
+        meta=meta,
+    )
     write_ground_truth(out / GT_DIR, gt)
     if preview:
-        write_image(out / "preview.png",
-                    contact_sheet(preview_images, gt, true_rig, scenario.scene.name))
-    log.info("rendered %s: %d frames x %d cameras in %.1f s", scenario.scene.name, n_frames,
-             len(cams), render_s)
-    return SynthSummary(out, scenario.scene.name, n_frames, cams, n_camera_frames, missing,
-                        tuple(chor.events), render_s=render_s)
+        write_image(
+            out / "preview.png", contact_sheet(preview_images, gt, true_rig, scenario.scene.name)
+        )
+    log.info(
+        "rendered %s: %d frames x %d cameras in %.1f s",
+        scenario.scene.name,
+        n_frames,
+        len(cams),
+        render_s,
+    )
+    return SynthSummary(
+        out,
+        scenario.scene.name,
+        n_frames,
+        cams,
+        n_camera_frames,
+        missing,
+        tuple(chor.events),
+        render_s=render_s,
+    )
 
 
 def _label_image(prims: list[Ellipsoid], winner: np.ndarray, r: CameraRenderer) -> np.ndarray:
@@ -353,11 +450,22 @@ def _preview_frames(chor: Choreography, n_frames: int, fps: float) -> list[int]:
     return sorted(picks)
 
 
-def _write_recording_toml(out: Path, scenario: Scenario, cams: tuple[str, ...],
-                          writers: dict) -> None:
-    lines = ["# written by `surveil synth`; see docs/formats.md",
-             'rig = "rig.yaml"', f"fps = {scenario.scene.fps!r}", "start_time_ns = 0", ""]
+def _write_recording_toml(
+    out: Path, scenario: Scenario, cams: tuple[str, ...], writers: dict
+) -> None:
+    lines = [
+        "# written by `surveil synth`; see docs/formats.md",
+        'rig = "rig.yaml"',
+        f"fps = {scenario.scene.fps!r}",
+        "start_time_ns = 0",
+        "",
+    ]
     for name in cams:
-        lines += ["[[cameras]]", f'name = "{name}"', f'video = "{writers[name].video_name}"',
-                  f'timestamps = "{name}.csv"', ""]
+        lines += [
+            "[[cameras]]",
+            f'name = "{name}"',
+            f'video = "{writers[name].video_name}"',
+            f'timestamps = "{name}.csv"',
+            "",
+        ]
     (out / "recording.toml").write_text("\n".join(lines))

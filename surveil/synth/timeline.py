@@ -103,21 +103,33 @@ class Actor:
 
         def fn(t: float) -> np.ndarray:
             drift = 0.006 * np.sin(np.array([0.8, 0.6, 0.7]) * t + self.drift_phase[i])
-            return carry_hand_target(self.shape, self.root(t), self.yaw_at(t),
-                                     SIDE_SIGN[side]) + drift
+            return (
+                carry_hand_target(self.shape, self.root(t), self.yaw_at(t), SIDE_SIGN[side])
+                + drift
+            )
 
         return fn
 
     def shoulder(self, side: str, t: float) -> np.ndarray:
         fwd, left = body_axes(self.yaw_at(t))
-        return (self.root(t) + UP * self.shape.shoulder_height_m
-                + SIDE_SIGN[side] * self.shape.shoulder_half_width_m * left)
+        return (
+            self.root(t)
+            + UP * self.shape.shoulder_height_m
+            + SIDE_SIGN[side] * self.shape.shoulder_half_width_m * left
+        )
 
     def pose(self, t: float, gait_phase: float, gait_amp: float) -> Pose:
         hands = np.stack([self.hands[s](t) for s in SIDES])
         bob = np.array([0.0, 0.0, 0.004 * np.sin(2 * np.pi * 0.25 * t + self.drift_phase[0, 0])])
-        return solve_pose(self.shape, self.root(t), self.yaw_at(t), hands,
-                          gait_phase=gait_phase, gait_amp=gait_amp, head_offset_m=bob)
+        return solve_pose(
+            self.shape,
+            self.root(t),
+            self.yaw_at(t),
+            hands,
+            gait_phase=gait_phase,
+            gait_amp=gait_amp,
+            head_offset_m=bob,
+        )
 
 
 @dataclass
@@ -171,7 +183,7 @@ class Compiler:
         self.rng = rng
         self.actors: dict[str, Actor] = {}
         ids = person_ids(scenario)
-        for n, (pid, spec) in enumerate(zip(ids, scenario.people), start=1):
+        for n, (pid, spec) in enumerate(zip(ids, scenario.people, strict=False), start=1):
             where = f"people[{n - 1}]"
             shape = BodyShape.from_height(spec.height_m)
             look = Appearance(
@@ -180,7 +192,8 @@ class Compiler:
                 shirt=parse_rgb(spec.shirt, f"{where}.shirt"),
                 trousers=parse_rgb(spec.trousers, f"{where}.trousers"),
                 shoes=parse_rgb(spec.shoes, f"{where}.shoes"),
-                long_sleeves=spec.sleeves == "long")
+                long_sleeves=spec.sleeves == "long",
+            )
             root = Track(const([*spec.position_m, 0.0]))
             yaw = Track(const([np.radians(spec.facing_deg)]))
             actor = Actor(pid, n, shape, look, root, yaw, {}, rng.uniform(0, 2 * np.pi, (2, 3)))
@@ -201,10 +214,15 @@ class Compiler:
                     centre, top = self.tops[o.on]
                     base, z = base + centre, top + size[2] / 2
                 state = ("", np.array([base[0], base[1], z]))
-            self.objects[o.name] = ObjectTrack(o.name, o.hue_deg,
-                                               hsv_albedo(o.hue_deg, o.saturation, o.value),
-                                               size, o.shape, [(-np.inf, *state)])
-        for name, obj in self.objects.items():
+            self.objects[o.name] = ObjectTrack(
+                o.name,
+                o.hue_deg,
+                hsv_albedo(o.hue_deg, o.saturation, o.value),
+                size,
+                o.shape,
+                [(-np.inf, *state)],
+            )
+        for _name, obj in self.objects.items():
             if obj.states[0][1]:
                 pid, hand = obj.states[0][1].split("/")
                 actor = self.actors[pid]
@@ -238,31 +256,54 @@ class Compiler:
             if t0 < b1 and b0 < t1:
                 raise ConfigError(
                     f"actions: {label} is busy with {other} ({b0:.2f}-{b1:.2f} s) when "
-                    f"{what} ({t0:.2f}-{t1:.2f} s) needs it; move one of them in time")
+                    f"{what} ({t0:.2f}-{t1:.2f} s) needs it; move one of them in time"
+                )
         self.busy.setdefault(label, []).append((t0, t1, what))
 
-    def event(self, activity: str, t0: float, climax: float, t_end: float,
-              actors: tuple[str, ...], persons: tuple[str, ...], obj: str | None = None,
-              frm: str | None = None, to: str | None = None) -> None:
+    def event(
+        self,
+        activity: str,
+        t0: float,
+        climax: float,
+        t_end: float,
+        actors: tuple[str, ...],
+        persons: tuple[str, ...],
+        obj: str | None = None,
+        frm: str | None = None,
+        to: str | None = None,
+    ) -> None:
         what = f"{persons[0]} {activity} at {t0:.2f} s"
         for label in actors:
             if label.endswith("_hand"):
                 self.claim(label, t0, t_end, what)
         hue = self.objects[obj].hue_deg if obj else None
-        self.events.append(ActivityEvent(
-            activity=activity, start_ns=round(t0 * NS), climax_ns=round(climax * NS),
-            end_ns=round(t_end * NS), actors=actors, persons=persons, rule="ground_truth",
-            object_hue_deg=hue, from_actor=frm, to_actor=to, object_name=obj))
+        self.events.append(
+            ActivityEvent(
+                activity=activity,
+                start_ns=round(t0 * NS),
+                climax_ns=round(climax * NS),
+                end_ns=round(t_end * NS),
+                actors=actors,
+                persons=persons,
+                rule="ground_truth",
+                object_hue_deg=hue,
+                from_actor=frm,
+                to_actor=to,
+                object_name=obj,
+            )
+        )
 
-    def check_reach(self, act: ActionSpec, actor: Actor, side: str, t: float,
-                    target: np.ndarray, what: str) -> None:
+    def check_reach(
+        self, act: ActionSpec, actor: Actor, side: str, t: float, target: np.ndarray, what: str
+    ) -> None:
         reach = actor.shape.arm_reach_m
         dist = float(np.linalg.norm(target - actor.shoulder(side, t)))
         if dist > reach * 0.98:
             raise ConfigError(
                 f"actions (at_s = {act.at_s}, {act.person} {act.do}): {act.person}'s "
                 f"{side} hand cannot reach {what} ({dist:.2f} m from the shoulder, arm "
-                f"{reach:.2f} m); move the people/objects closer or add a walk_to first")
+                f"{reach:.2f} m); move the people/objects closer or add a walk_to first"
+            )
 
     # -- actions ------------------------------------------------------------------------------
 
@@ -301,12 +342,14 @@ class Compiler:
         elif act.facing_deg is not None:
             heading = float(np.radians(act.facing_deg))
         else:
-            raise ConfigError(f"actions (at_s = {act.at_s}, {act.person} turn): give "
-                              f"facing_deg or towards")
+            raise ConfigError(
+                f"actions (at_s = {act.at_s}, {act.person} turn): give facing_deg or towards"
+            )
         self.turn_to(actor, t0, heading, act.duration_s or 0.8)
 
-    def two_hands_together(self, actor: Actor, t0: float, reach: float, hold: float,
-                           back: float) -> tuple[float, float, float]:
+    def two_hands_together(
+        self, actor: Actor, t0: float, reach: float, hold: float, back: float
+    ) -> tuple[float, float, float]:
         """Both hands of one person meet in front of the chest. Returns climax, leave, end."""
         fwd, left = body_axes(actor.yaw_at(t0))
         centre = self.wobble(actor.root(t0) + fwd * 0.34 + UP * 0.70 * actor.shape.height_m)
@@ -319,27 +362,36 @@ class Compiler:
     def do_clap(self, act: ActionSpec, actor: Actor, t0: float) -> None:
         scale = (act.duration_s or 1.3) / 1.3
         climax, leave, end = self.two_hands_together(
-            actor, t0, self.jitter(0.55 * scale), 0.12 * scale, self.jitter(0.6 * scale))
+            actor, t0, self.jitter(0.55 * scale), 0.12 * scale, self.jitter(0.6 * scale)
+        )
         for side in SIDES:
             actor.hands[side].move(leave, end, self.home(actor, side, end))
-        self.event("clap", t0, climax, end, (f"{actor.pid}/left_hand", f"{actor.pid}/right_hand"),
-                   (actor.pid,))
+        self.event(
+            "clap",
+            t0,
+            climax,
+            end,
+            (f"{actor.pid}/left_hand", f"{actor.pid}/right_hand"),
+            (actor.pid,),
+        )
 
-    def meeting(self, a: Actor, b: Actor, t0: float, height_frac: float,
-                act: ActionSpec) -> tuple[np.ndarray, np.ndarray]:
+    def meeting(
+        self, a: Actor, b: Actor, t0: float, height_frac: float, act: ActionSpec
+    ) -> tuple[np.ndarray, np.ndarray]:
         ra, rb = a.root(t0), b.root(t0)
         d = rb - ra
         dist = float(np.linalg.norm(d))
         max_dist = 2 * 0.9 * min(a.shape.arm_reach_m, b.shape.arm_reach_m) + 0.2
         if dist > max_dist or dist < 0.5:
-            raise ConfigError(f"actions (at_s = {act.at_s}, {act.person} {act.do}): "
-                              f"{a.pid} and {b.pid} stand {dist:.2f} m apart; they must be "
-                              f"0.5-{max_dist:.2f} m apart to reach each other (walk_to first)")
+            raise ConfigError(
+                f"actions (at_s = {act.at_s}, {act.person} {act.do}): "
+                f"{a.pid} and {b.pid} stand {dist:.2f} m apart; they must be "
+                f"0.5-{max_dist:.2f} m apart to reach each other (walk_to first)"
+            )
         h = height_frac * 0.5 * (a.shape.height_m + b.shape.height_m)
         return self.wobble(0.5 * (ra + rb) + UP * h), _unit(d)
 
-    def do_handshake(self, act: ActionSpec, actor: Actor, t0: float,
-                     gap_m: float = 0.0) -> None:
+    def do_handshake(self, act: ActionSpec, actor: Actor, t0: float, gap_m: float = 0.0) -> None:
         other = self.actors[act.partner]
         centre, d = self.meeting(actor, other, t0, 0.57, act)
         reach, hold, back = self.jitter(0.8), (act.duration_s or 2.6) - 1.6, self.jitter(0.7)
@@ -349,18 +401,22 @@ class Compiler:
         for who, sgn in ((actor, -1.0), (other, 1.0)):
             base = centre + sgn * (0.5 * gap_m + 0.01) * d + sgn * 0.012 * side_dir
             if touching:
+
                 def pump(t: float, base=base) -> np.ndarray:
                     amp = 0.025 * np.clip((t - climax) / 0.2, 0, 1)
                     return base + UP * amp * np.sin(2 * np.pi * 2.2 * (t - climax))
+
                 who.hands["right"].move(t0, climax, pump)
             else:
                 who.hands["right"].move(t0, climax, const(base))
-            who.hands["right"].move(climax + hold, climax + hold + back,
-                                    self.home(who, "right", climax + hold + back))
+            who.hands["right"].move(
+                climax + hold, climax + hold + back, self.home(who, "right", climax + hold + back)
+            )
         hands = (f"{actor.pid}/right_hand", f"{other.pid}/right_hand")
         if touching:
-            self.event("handshake", t0, climax, climax + hold + back, hands,
-                       (actor.pid, other.pid))
+            self.event(
+                "handshake", t0, climax, climax + hold + back, hands, (actor.pid, other.pid)
+            )
         else:  # a near miss: no event, but the hands are still busy
             for label in hands:
                 self.claim(label, t0, climax + hold + back, f"{actor.pid} approach")
@@ -372,23 +428,30 @@ class Compiler:
         obj = self.objects[act.object]
         holder = obj.holder_at(t0)
         if not holder.startswith(f"{actor.pid}/"):
-            raise ConfigError(f"actions (at_s = {act.at_s}, {act.person} give): "
-                              f"{act.person} does not hold {act.object!r} then "
-                              f"(holder: {holder or 'nobody'}); pick it first")
+            raise ConfigError(
+                f"actions (at_s = {act.at_s}, {act.person} give): "
+                f"{act.person} does not hold {act.object!r} then "
+                f"(holder: {holder or 'nobody'}); pick it first"
+            )
         side = holder.split("/")[1].removesuffix("_hand")
         if act.hand and act.hand != side:
-            raise ConfigError(f"actions (at_s = {act.at_s}, give): {act.object!r} is in the "
-                              f"{side} hand, not the {act.hand} hand")
+            raise ConfigError(
+                f"actions (at_s = {act.at_s}, give): {act.object!r} is in the "
+                f"{side} hand, not the {act.hand} hand"
+            )
         other = self.actors[act.partner]
         opposite = "left" if side == "right" else "right"
         to_side = act.to_hand or opposite
         giver, receiver = f"{actor.pid}/{side}_hand", f"{other.pid}/{to_side}_hand"
         if other is actor:
             if to_side == side:
-                raise ConfigError(f"actions (at_s = {act.at_s}, give): a hand-to-hand "
-                                  f"exchange needs the other hand (to_hand = {opposite!r})")
-            climax, leave, end = self.two_hands_together(actor, t0, self.jitter(0.6), 0.45,
-                                                         self.jitter(0.6))
+                raise ConfigError(
+                    f"actions (at_s = {act.at_s}, give): a hand-to-hand "
+                    f"exchange needs the other hand (to_hand = {opposite!r})"
+                )
+            climax, leave, end = self.two_hands_together(
+                actor, t0, self.jitter(0.6), 0.45, self.jitter(0.6)
+            )
             transfer = climax + 0.2
             obj.states.append((transfer, receiver, None))
             actor.hands[side].move(leave, end, actor.rest(side))
@@ -406,11 +469,13 @@ class Compiler:
             actor.hands[side].move(climax + hold, end, actor.rest(side))
             other.hands[to_side].move(climax + hold, end, other.carry(to_side))
             persons = (actor.pid, other.pid)
-        self.event("exchange", t0, climax, end, (giver, receiver), persons, act.object,
-                   giver, receiver)
+        self.event(
+            "exchange", t0, climax, end, (giver, receiver), persons, act.object, giver, receiver
+        )
 
-    def surface_target(self, actor: Actor, side: str, t0: float, obj: ObjectTrack,
-                       point: np.ndarray) -> np.ndarray:
+    def surface_target(
+        self, actor: Actor, side: str, t0: float, obj: ObjectTrack, point: np.ndarray
+    ) -> np.ndarray:
         """Hand centre grasping an object whose centre is ``point``, from the near side."""
         toward = _unit((point - actor.root(t0)) * np.array([1.0, 1.0, 0.0]))
         offset = 0.5 * obj.size_m[:2].max() + 0.5 * actor.shape.hand_thickness_m + 0.006
@@ -420,13 +485,17 @@ class Compiler:
         obj = self.objects[act.object]
         holder, rest = obj.state(t0)
         if holder:
-            raise ConfigError(f"actions (at_s = {act.at_s}, pick): {act.object!r} is held "
-                              f"by {holder} then; only a resting object can be picked")
+            raise ConfigError(
+                f"actions (at_s = {act.at_s}, pick): {act.object!r} is held "
+                f"by {holder} then; only a resting object can be picked"
+            )
         side = act.hand or "right"
         label = f"{actor.pid}/{side}_hand"
         if self.held_object(label, t0):
-            raise ConfigError(f"actions (at_s = {act.at_s}, pick): {label} already holds "
-                              f"{self.held_object(label, t0)!r}")
+            raise ConfigError(
+                f"actions (at_s = {act.at_s}, pick): {label} already holds "
+                f"{self.held_object(label, t0)!r}"
+            )
         target = self.surface_target(actor, side, t0, obj, rest)
         self.check_reach(act, actor, side, t0 + 0.8, target, f"object {act.object!r}")
         dist = float(np.linalg.norm(target - actor.hands[side](t0)))
@@ -442,8 +511,10 @@ class Compiler:
         obj = self.objects[act.object]
         holder = obj.holder_at(t0)
         if not holder.startswith(f"{actor.pid}/"):
-            raise ConfigError(f"actions (at_s = {act.at_s}, place): {act.person} does not "
-                              f"hold {act.object!r} then (holder: {holder or 'nobody'})")
+            raise ConfigError(
+                f"actions (at_s = {act.at_s}, place): {act.person} does not "
+                f"hold {act.object!r} then (holder: {holder or 'nobody'})"
+            )
         side = holder.split("/")[1].removesuffix("_hand")
         if act.where:
             centre, top = self.tops[act.where]
@@ -466,22 +537,35 @@ class Compiler:
         side = act.hand or "right"
         fwd, left = body_axes(actor.yaw_at(t0))
         head = actor.root(t0) + UP * actor.shape.head_centre_height_m + 0.02 * fwd
-        target = (head + fwd * (actor.shape.head_radii_m[1] + 0.5
-                                * actor.shape.hand_thickness_m + 0.004)
-                  - UP * 0.035 + SIDE_SIGN[side] * 0.03 * left)
+        target = (
+            head
+            + fwd * (actor.shape.head_radii_m[1] + 0.5 * actor.shape.hand_thickness_m + 0.004)
+            - UP * 0.035
+            + SIDE_SIGN[side] * 0.03 * left
+        )
         climax = t0 + self.jitter(0.6)
         hold = act.duration_s or 0.5
         end = climax + hold + self.jitter(0.6)
         actor.hands[side].move(t0, climax, const(target))
         actor.hands[side].move(climax + hold, end, self.home(actor, side, end))
-        self.event("touch_face", t0, climax, end, (f"{actor.pid}/{side}_hand",
-                                                   f"{actor.pid}/head"), (actor.pid,))
+        self.event(
+            "touch_face",
+            t0,
+            climax,
+            end,
+            (f"{actor.pid}/{side}_hand", f"{actor.pid}/head"),
+            (actor.pid,),
+        )
 
     def do_wave(self, act: ActionSpec, actor: Actor, t0: float) -> None:
         side = act.hand or "right"
         fwd, left = body_axes(actor.yaw_at(t0))
-        up_point = (actor.shoulder(side, t0) + UP * 0.40 * actor.shape.height_m / 1.75
-                    + SIDE_SIGN[side] * 0.2 * left + 0.12 * fwd)
+        up_point = (
+            actor.shoulder(side, t0)
+            + UP * 0.40 * actor.shape.height_m / 1.75
+            + SIDE_SIGN[side] * 0.2 * left
+            + 0.12 * fwd
+        )
         reach = self.jitter(0.6)
         dur = act.duration_s or 1.6
 

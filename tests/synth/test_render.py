@@ -5,8 +5,10 @@ from surveil.synth.render import _ray_box, _ray_ellipsoid
 
 
 def grid(n=41, half=0.2):
-    xn, yn = np.meshgrid(np.linspace(-half, half, n, dtype=np.float32),
-                         np.linspace(-half, half, n, dtype=np.float32))
+    xn, yn = np.meshgrid(
+        np.linspace(-half, half, n, dtype=np.float32),
+        np.linspace(-half, half, n, dtype=np.float32),
+    )
     return xn, yn
 
 
@@ -31,8 +33,9 @@ def test_ray_ellipsoid_matches_the_analytic_sphere():
 
 def test_ray_box_hits_the_front_face_at_its_depth():
     xn, yn = grid()
-    t, n0, n1, n2, hit = _ray_box(xn, yn, np.array([0.0, 0, 2.0]), np.eye(3),
-                                  np.array([0.1, 0.1, 0.2]))
+    t, n0, n1, n2, hit = _ray_box(
+        xn, yn, np.array([0.0, 0, 2.0]), np.eye(3), np.array([0.1, 0.1, 0.2])
+    )
     # front face at z = 1.8, half width 0.1 -> |x/z| < 0.1/1.8
     inside = (np.abs(xn) < 0.1 / 1.8 - 1e-3) & (np.abs(yn) < 0.1 / 1.8 - 1e-3)
     assert hit[inside].all()

@@ -53,13 +53,16 @@ def test_action_naming_an_unknown_person_fails(tmp_path):
 
 
 def test_with_key_names_the_partner(tmp_path):
-    path = write(tmp_path, '[[actions]]\nat_s = 1.0\nperson = "p1"\ndo = "handshake"\n'
-                           'with = "p2"\n')
+    path = write(
+        tmp_path, '[[actions]]\nat_s = 1.0\nperson = "p1"\ndo = "handshake"\nwith = "p2"\n'
+    )
     assert load_scenario(path).actions[0].partner == "p2"
 
 
 def test_unreachable_pick_is_refused_with_a_hint(tmp_path):
-    path = write(tmp_path, """
+    path = write(
+        tmp_path,
+        """
 [[furniture]]
 name = "table"
 centre_m = [4.5, 4.0]
@@ -71,13 +74,16 @@ at_s = 1.0
 person = "p2"
 do = "pick"
 object = "box"
-""")
+""",
+    )
     with pytest.raises(ConfigError, match="cannot reach object 'box'.*walk_to"):
         compile_scenario(load_scenario(path), np.random.default_rng(0))
 
 
 def test_one_hand_cannot_do_two_things_at_once(tmp_path):
-    path = write(tmp_path, """
+    path = write(
+        tmp_path,
+        """
 [[actions]]
 at_s = 1.0
 person = "p1"
@@ -86,13 +92,16 @@ do = "clap"
 at_s = 1.3
 person = "p1"
 do = "touch_face"
-""")
+""",
+    )
     with pytest.raises(ConfigError, match="p1/right_hand is busy with p1 clap"):
         compile_scenario(load_scenario(path), np.random.default_rng(0))
 
 
 def test_giving_an_object_one_does_not_hold_fails(tmp_path):
-    path = write(tmp_path, '[[actions]]\nat_s = 1.0\nperson = "p2"\ndo = "give"\n'
-                           'object = "cup"\nwith = "p1"\n')
+    path = write(
+        tmp_path,
+        '[[actions]]\nat_s = 1.0\nperson = "p2"\ndo = "give"\nobject = "cup"\nwith = "p1"\n',
+    )
     with pytest.raises(ConfigError, match="p2 does not hold 'cup'"):
         compile_scenario(load_scenario(path), np.random.default_rng(0))

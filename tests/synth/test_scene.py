@@ -79,16 +79,21 @@ def test_true_events_are_written(gt):
     assert [e.activity for e in gt.events] == ["exchange", "touch_face"]
     ex = gt.events[0]
     assert (ex.from_actor, ex.to_actor, ex.object_hue_deg) == (
-        "p1/right_hand", "p2/left_hand", 120.0)
+        "p1/right_hand",
+        "p2/left_hand",
+        120.0,
+    )
 
 
 def test_same_seed_gives_identical_ground_truth_and_reuses_up_to_date_output(
-        small_scenario, small_recording, tmp_path):
+    small_scenario, small_recording, tmp_path
+):
     out = tmp_path / "again"
     synthesise(small_scenario, out)
     for name in ("limbs.csv", "objects.csv", "events.json"):
         assert (out / "ground_truth" / name).read_bytes() == (
-            small_recording / "ground_truth" / name).read_bytes()
+            small_recording / "ground_truth" / name
+        ).read_bytes()
     assert (out / "cam0.csv").read_bytes() == (small_recording / "cam0.csv").read_bytes()
     assert synthesise(small_scenario, out).reused
 

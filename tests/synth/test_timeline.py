@@ -102,8 +102,10 @@ def test_pick_climax_is_when_the_hand_stops_at_the_object(chor):
     t = pick.climax_ns / NS
     dt = 1 / 30
     speed = np.linalg.norm(hands(chor, "p1", t + dt)[0] - hands(chor, "p1", t - dt)[0]) / (2 * dt)
-    peak = max(np.linalg.norm(hands(chor, "p1", s + dt)[0] - hands(chor, "p1", s)[0]) / dt
-               for s in np.arange(pick.start_ns / NS, t, dt))
+    peak = max(
+        np.linalg.norm(hands(chor, "p1", s + dt)[0] - hands(chor, "p1", s)[0]) / dt
+        for s in np.arange(pick.start_ns / NS, t, dt)
+    )
     assert speed < 0.1 * peak
     box_rest = chor.objects["box"].state(pick.start_ns / NS)[1]
     assert np.linalg.norm(hands(chor, "p1", t)[0] - box_rest) < 0.12
