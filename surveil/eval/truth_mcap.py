@@ -5,7 +5,6 @@ Foxglove or Rerun next to a run."""
 from __future__ import annotations
 
 import logging
-import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -15,33 +14,9 @@ from surveil.datatypes import CandidateSet, Phase, TargetSnapshot, parse_label
 from surveil.errors import InputError
 from surveil.io.ground_truth import GroundTruth, load_ground_truth
 from surveil.io.mcap_writer import McapWriter
+from surveil.io.recording import load_spec
 
 log = logging.getLogger(__name__)
-
-RECORDING_FILE = "recording.toml"
-
-
-def _read_recording_toml(recording_dir: Path) -> dict:
-    path = recording_dir / RECORDING_FILE
-    if not path.is_file():
-        raise InputError(f"{recording_dir}: not a recording ({RECORDING_FILE} is missing)")
-    try:
-        with open(path, "rb") as f:
-            return tomllib.load(f)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{path}: invalid TOML: {exc}") from None
-
-
-def _recording_rig(recording_dir: Path, table: dict) -> Rig:
-    from surveil.io.calibration import load_rig  # only needed without an explicit rig
-
-    rig_key = table.get("rig")
-    if not isinstance(rig_key, str):
-        raise InputError(
-            f"{recording_dir / RECORDING_FILE}: key 'rig' (path of the rig "
-            f"calibration, relative to the recording) is missing or not a string"
-        )
-    return load_rig(recording_dir / rig_key)  # an absolute rig path stays absolute
 
 
 def truth_frames(gt: GroundTruth) -> list[tuple[int, list[TargetSnapshot], CandidateSet]]:
@@ -92,16 +67,16 @@ def write_truth_mcap(recording_dir: Path, out: Path, *, rig: Rig | None = None) 
         If the recording, its rig or its ground truth cannot be read.
     """
     recording_dir = Path(recording_dir)
-    table = _read_recording_toml(recording_dir)
+    toml_path = recording_dir / "recording.toml"
+    if not toml_path.is_file():
+        raise InputError(f"{recording_dir}: not a recording (recording.toml is missing)")
+    spec = load_spec(toml_path)
     gt = load_ground_truth(recording_dir)
     if rig is None:
-        rig = _recording_rig(recording_dir, table)
-    start = table.get("start_time_ns", 0)
-    if not isinstance(start, int) or start < 0:
-        raise InputError(
-            f"{recording_dir / RECORDING_FILE}: start_time_ns must be an "
-            f"integer >= 0, got {start!r}"
-        )
+        from surveil.io.calibration import load_rig
+
+        rig = load_rig(recording_dir / spec.rig)  # an absolute rig path stays absolute
+    start = spec.start_time_ns
     with McapWriter(
         Path(out),
         rig,

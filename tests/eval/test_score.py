@@ -133,7 +133,10 @@ def rig() -> Rig:
 def rec(tmp_path_factory: pytest.TempPathFactory) -> Path:
     rec_dir = tmp_path_factory.mktemp("data") / "rec"
     write_ground_truth(rec_dir / "ground_truth", make_ground_truth())
-    (rec_dir / "recording.toml").write_text('rig = "rig.yaml"\nfps = 15.0\n')
+    (rec_dir / "recording.toml").write_text(
+        'rig = "rig.yaml"\nfps = 15.0\n'
+        + "".join(f'[[cameras]]\nname = "{c.name}"\nvideo = "{c.name}.mp4"\n' for c in make_rig())
+    )
     return rec_dir
 
 

@@ -10,7 +10,7 @@ import pytest
 from surveil.camera import Rig, look_at
 from surveil.cli import ExitCode, main
 from surveil.datatypes import ActivityEvent
-from surveil.errors import InputError
+from surveil.errors import ConfigError, InputError
 from surveil.eval.truth_mcap import write_truth_mcap
 from surveil.io.calibration import save_rig
 from surveil.io.ground_truth import GroundTruth, write_ground_truth
@@ -81,6 +81,7 @@ def rec(tmp_path: Path, rig: Rig) -> Path:
     save_rig(rig, tmp_path / "lab.yaml")
     (rec_dir / "recording.toml").write_text(
         'rig = "../lab.yaml"\nfps = 10.0\nstart_time_ns = 5000000000\n'
+        '[[cameras]]\nname = "solo"\nvideo = "solo.mp4"\n'
     )
     return rec_dir
 
@@ -129,7 +130,7 @@ def test_missing_recording_or_rig_is_an_input_error(rec: Path, tmp_path: Path) -
     with pytest.raises(InputError, match="recording.toml is missing"):
         write_truth_mcap(tmp_path / "nowhere", tmp_path / "x.mcap")
     (rec / "recording.toml").write_text("fps = 10.0\n")
-    with pytest.raises(InputError, match="'rig'"):
+    with pytest.raises(ConfigError, match=r"recording\.toml: rig is required"):
         write_truth_mcap(rec, tmp_path / "x.mcap")
 
 
