@@ -81,6 +81,7 @@ def cmd_synth(args: argparse.Namespace) -> ExitCode:
         args.scenario,
         out,
         preview=args.preview,
+        preview_times_s=tuple(args.preview_at or ()),
         overwrite=args.force,
         on_progress=progress_bar(f"synth {args.scenario.stem}", args.quiet),
     )
@@ -195,6 +196,13 @@ def build_parser() -> argparse.ArgumentParser:
         "--preview",
         action="store_true",
         help="also write preview.png, a contact sheet of all cameras",
+    )
+    p.add_argument(
+        "--preview-at",
+        type=float,
+        action="append",
+        metavar="SECONDS",
+        help="contact sheet at this time (repeatable; default: event climaxes)",
     )
     p.add_argument("--force", action="store_true", help="overwrite an existing output")
     p.set_defaults(command=cmd_synth)

@@ -19,6 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from surveil.io.ground_truth import MaskClass
+
 UP = np.array([0.0, 0.0, 1.0])
 
 
@@ -340,8 +342,6 @@ def body_primitives(
     shape: BodyShape, look: Appearance, pose: Pose, person: int
 ) -> list[Ellipsoid]:
     """The ellipsoids of one posed person, with ground-truth mask codes."""
-    from surveil.io.ground_truth import MaskClass  # codes only; no I/O
-
     fwd, left = body_axes(pose.yaw_rad)
     s = shape.height_m / 1.75
     root = pose.root_m

@@ -186,8 +186,8 @@ class CameraRenderer:
         albedo[is_floor] = self._floor_texture(P[is_floor])
         albedo[is_ceiling] = np.array([0.86, 0.87, 0.87], dtype=np.float32)
         albedo[is_wall] = self._wall_texture(P[is_wall], axis[is_wall], d_w[is_wall])
-        wall_cls = self._wall_decor_class(P, is_wall, axis, d_w)
-        cls[wall_cls] = int(MaskClass.SKIN_DISTRACTOR)
+        if room.skin_panel:
+            cls[is_wall & self._skin_panel(P, axis)] = int(MaskClass.SKIN_DISTRACTOR)
         for spec in furniture:
             for box in furniture_boxes(spec):
                 tb, nb = ray_box_world(C, d_w, box)
@@ -284,11 +284,6 @@ class CameraRenderer:
             & (P[..., 0] > X - 1e-6)
             & (np.abs(P[..., 1] - 0.4 * Y) < 0.45)
             & (np.abs(P[..., 2] - 1.4) < 0.3)
-        )
-
-    def _wall_decor_class(self, P, is_wall, axis, d_w) -> np.ndarray:
-        return (
-            is_wall & self._skin_panel(P, axis) if self.room.skin_panel else np.zeros_like(is_wall)
         )
 
     # -- per frame ----------------------------------------------------------------------------

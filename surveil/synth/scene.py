@@ -28,7 +28,7 @@ import numpy as np
 
 from surveil.camera import Camera, Rig
 from surveil.datatypes import ActivityEvent
-from surveil.errors import InputError
+from surveil.errors import ConfigError, InputError
 from surveil.io.ground_truth import GT_DIR, GroundTruth, MaskClass, write_ground_truth
 from surveil.io.video_writer import FrameWriter, write_image
 from surveil.synth.actors import Ellipsoid, Part, body_primitives
@@ -153,6 +153,7 @@ def synthesise(
     out_dir: Path,
     *,
     preview: bool = False,
+    preview_times_s: tuple[float, ...] = (),
     overwrite: bool = False,
     on_progress: Callable[[int, int], None] | None = None,
 ) -> SynthSummary:
@@ -174,6 +175,7 @@ def synthesise(
             and stamp.read_text().strip() == digest
             and not overwrite
             and (not preview or (out_dir / "preview.png").is_file())
+            and not preview_times_s
         ):
             return _existing_summary(out_dir, scenario)
         if not overwrite and any(out_dir.iterdir()):
@@ -189,7 +191,7 @@ def synthesise(
     out_dir.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}-", dir=out_dir.parent))
     try:
-        summary = _render(scenario, scenario_path, tmp, preview, on_progress)
+        summary = _render(scenario, scenario_path, tmp, preview, preview_times_s, on_progress)
         (tmp / GT_DIR / "scenario.sha256").write_text(digest + "\n")
         if out_dir.exists():
             shutil.rmtree(out_dir)
@@ -222,6 +224,7 @@ def _render(
     scenario_path: Path,
     out: Path,
     preview: bool,
+    preview_times_s: tuple[float, ...],
     on_progress: Callable[[int, int], None] | None,
 ) -> SynthSummary:
     from surveil.io.calibration import save_rig
@@ -240,8 +243,6 @@ def _render(
     eff = scenario.effects
     for cam_name in eff.late_start_s:
         if cam_name not in true_rig:
-            from surveil.errors import ConfigError
-
             raise ConfigError(
                 f"{scenario_path}: effects.late_start_s names unknown camera "
                 f"{cam_name!r} (rig: {', '.join(true_rig.names)})"
@@ -276,9 +277,15 @@ def _render(
     obj_pos = np.full((n_frames, len(obj_names), 3), np.nan)
     held = np.full((n_frames, len(obj_names)), "", dtype=object)
     mask_dir = out / GT_DIR / "masks"
-    preview_frames = _preview_frames(chor, n_frames, fps) if preview else []
+    preview = preview or bool(preview_times_s)
+    if preview_times_s:
+        preview_frames = sorted(
+            {min(n_frames - 1, max(0, round(t * fps))) for t in preview_times_s}
+        )
+    else:
+        preview_frames = _preview_frames(chor, n_frames, fps) if preview else []
     preview_images: dict[int, dict[str, np.ndarray]] = {}
-    prev_root = {pid: chor.actors[pid].root_at(0.0) for pid in ids}
+    prev_root = {pid: chor.actors[pid].root(0.0) for pid in ids}
     gait = dict.fromkeys(ids, 0.0)
     min_px = max(6, int(12 * (true_rig.cameras[0].width / 640) ** 2))
     for k in range(n_frames):
@@ -288,7 +295,7 @@ def _render(
         casters = []
         for pid in ids:
             actor = chor.actors[pid]
-            root = actor.root_at(t)
+            root = actor.root(t)
             step = float(np.linalg.norm(root - prev_root[pid]))
             prev_root[pid] = root
             gait[pid] += 2 * np.pi * step / STRIDE_M

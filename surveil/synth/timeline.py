@@ -83,9 +83,6 @@ class Actor:
     hands: dict[str, Track]
     drift_phase: np.ndarray  # (2, 3) idle drift phases
 
-    def root_at(self, t: float) -> np.ndarray:
-        return self.root(t)
-
     def yaw_at(self, t: float) -> float:
         return float(self.yaw(t)[0])
 

@@ -117,3 +117,24 @@ def test_synth_cli_reports_a_bad_scenario(tmp_path, capsys):
 def test_preview_contact_sheet_is_written(small_recording):
     sheet = cv2.imread(str(small_recording / "preview.png"))
     assert sheet is not None and sheet.shape[1] == 4 * 320 and sheet.std() > 10
+
+
+def test_preview_at_chosen_times_has_one_row_per_time(small_scenario, tmp_path):
+    out = tmp_path / "rec"
+    code = main(
+        [
+            "-q",
+            "synth",
+            str(small_scenario),
+            "--out",
+            str(out),
+            "--preview-at",
+            "0.5",
+            "--preview-at",
+            "2.0",
+        ]
+    )
+    assert code == ExitCode.OK
+    sheet = cv2.imread(str(out / "preview.png"))
+    tile_h = 240  # 320x240 tiles at full size
+    assert sheet.shape[0] == 28 + 2 * tile_h
