@@ -215,3 +215,86 @@ class ActivityEvent:
             )
         for a in self.actors:
             parse_label(a)
+
+
+@dataclass(frozen=True, slots=True)
+class Silhouettes:
+    """Person silhouettes of one camera frame (foreground connected components).
+
+    labels : (H, W) int32 -- 0 background, s = 1..n for component s
+    top_v_px, bottom_v_px : (n,) float64 -- first and last image row of each component
+    dist_outside_px : (H, W) float32 -- distance of every pixel to the nearest silhouette
+        pixel, 0 inside a silhouette (for the silhouette prior p_b, paper 004 eq. 27)
+    """
+
+    labels: np.ndarray
+    top_v_px: np.ndarray
+    bottom_v_px: np.ndarray
+    dist_outside_px: np.ndarray
+
+    def __post_init__(self) -> None:
+        require_shape("labels", self.labels, (None, None), np.integer)
+        n = len(self.top_v_px)
+        require_shape("top_v_px", self.top_v_px, (n,), np.floating)
+        require_shape("bottom_v_px", self.bottom_v_px, (n,), np.floating)
+        require_shape("dist_outside_px", self.dist_outside_px, self.labels.shape, np.floating)
+        readonly(self.labels, self.top_v_px, self.bottom_v_px, self.dist_outside_px)
+
+    @property
+    def n(self) -> int:
+        return len(self.top_v_px)
+
+    @property
+    def mask(self) -> np.ndarray:
+        """(H, W) bool foreground."""
+        return self.labels > 0
+
+
+@dataclass(frozen=True, slots=True)
+class BlobSet:
+    """Skin blobs of one camera frame, largest first (paper 004 section 6.2).
+
+    centroids_px : (B, 2) float64 -- centre of mass (u, v)
+    areas_px : (B,) int64
+    bboxes_px : (B, 4) int32 -- x, y, width, height
+    silhouette : (B,) int32 -- label of the silhouette component holding the blob (0 none)
+    rel_v : (B,) float64 -- (v - top) / (bottom - top) of the blob's silhouette: 0 at the top
+    labels : (H, W) int32 -- 0 none, i + 1 for blob i
+    """
+
+    centroids_px: np.ndarray
+    areas_px: np.ndarray
+    bboxes_px: np.ndarray
+    silhouette: np.ndarray
+    rel_v: np.ndarray
+    labels: np.ndarray
+
+    def __post_init__(self) -> None:
+        n = len(self.centroids_px)
+        require_shape("centroids_px", self.centroids_px, (n, 2), np.floating)
+        require_shape("areas_px", self.areas_px, (n,), np.integer)
+        require_shape("bboxes_px", self.bboxes_px, (n, 4), np.integer)
+        require_shape("silhouette", self.silhouette, (n,), np.integer)
+        require_shape("rel_v", self.rel_v, (n,), np.floating)
+        require_shape("labels", self.labels, (None, None), np.integer)
+        readonly(
+            self.centroids_px,
+            self.areas_px,
+            self.bboxes_px,
+            self.silhouette,
+            self.rel_v,
+            self.labels,
+        )
+
+    def __len__(self) -> int:
+        return len(self.centroids_px)
+
+
+@dataclass(frozen=True, slots=True)
+class CameraObservation:
+    """Everything the per-camera stage found in one frame: silhouettes, skin, blobs."""
+
+    camera: str
+    silhouettes: Silhouettes
+    skin: np.ndarray  # (H, W) bool skin pixels (whole frame, before the silhouette mask)
+    blobs: BlobSet
