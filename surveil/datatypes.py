@@ -162,19 +162,36 @@ class TargetSnapshot:
 
 @dataclass(frozen=True, slots=True)
 class CandidateSet:
-    """3D candidate points of one frame set.
+    """3D candidate points of one frame set (paper 004 sections 5.1 and 6.3).
 
     points_m : (K, 3) float64, world frame, metres
     prior : (K,) float64, p(Z) in [0, 1]
+    half_gap_m : (K,) float64, optional -- d, half the shortest distance between the two
+        lines of sight (eq. 24)
+    cam_pairs : (K, 2) int, optional -- indices (into the rig's camera order) of the two views
+    blob_pairs : (K, 2) int, optional -- blob indices in those two views
     """
 
     points_m: np.ndarray
     prior: np.ndarray
+    half_gap_m: np.ndarray | None = None
+    cam_pairs: np.ndarray | None = None
+    blob_pairs: np.ndarray | None = None
 
     def __post_init__(self) -> None:
+        k = len(self.points_m)
         require_shape("points_m", self.points_m, (None, 3), np.floating)
-        require_shape("prior", self.prior, (len(self.points_m),), np.floating)
+        require_shape("prior", self.prior, (k,), np.floating)
         readonly(self.points_m, self.prior)
+        for name, shape, kind in (
+            ("half_gap_m", (k,), np.floating),
+            ("cam_pairs", (k, 2), np.integer),
+            ("blob_pairs", (k, 2), np.integer),
+        ):
+            value = getattr(self, name)
+            if value is not None:
+                require_shape(name, value, shape, kind)
+                readonly(value)
 
     @classmethod
     def empty(cls) -> CandidateSet:
