@@ -1,0 +1,213 @@
+"""3-D candidate points from pairs of views and their prior p(Z) (paper 004 sections 5.1, 6.3).
+
+Every blob of camera m is paired with every blob of camera m' > m; each pair's lines of sight
+give a point Z (the midpoint of their common perpendicular) and an error d (half its length).
+The prior p(Z) = p_o * p_t * p_b (eq. 19) scores how consistent the pair is; weak candidates
+are dropped and close ones merged. See docs/candidates.md.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Sequence
+
+import numpy as np
+
+from surveil.camera import Rig
+from surveil.datatypes import CameraObservation, CandidateSet
+from surveil.recon.settings import CandidateConfig
+from surveil.recon.triangulate import closest_points
+
+log = logging.getLogger(__name__)
+
+
+def _empty() -> CandidateSet:
+    return CandidateSet(
+        np.zeros((0, 3)),
+        np.zeros(0),
+        half_gap_m=np.zeros(0),
+        cam_pairs=np.zeros((0, 2), dtype=np.int64),
+        blob_pairs=np.zeros((0, 2), dtype=np.int64),
+    )
+
+
+def _gauss(x: np.ndarray, sigma: float) -> np.ndarray:
+    """exp(-x^2 / (2 sigma^2)); 0 where x is not finite."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        g = np.exp(-0.5 * np.square(x / sigma))
+    return np.where(np.isfinite(x), g, 0.0)
+
+
+def _silhouette_prior(
+    points_m: np.ndarray,
+    rig: Rig,
+    by_cam: dict[int, CameraObservation],
+    sigma_px: float,
+) -> np.ndarray:
+    """p_b (eq. 27): product over observed cameras Z projects into of a Gaussian in the
+    distance (px) of Z's projection to the nearest silhouette pixel."""
+    p_b = np.ones(len(points_m))
+    for m, obs in by_cam.items():
+        cam = rig.cameras[m]
+        px, depth = cam.project(points_m)
+        inside = cam.in_image(px, depth)
+        if not inside.any():
+            continue
+        dist_img = obs.silhouettes.dist_outside_px
+        h, w = dist_img.shape
+        if obs.silhouettes.n == 0:
+            # no silhouette at all: every point is far outside one
+            dist = np.full(int(inside.sum()), float(max(h, w)))
+        else:
+            uv = np.rint(px[inside]).astype(np.intp)
+            dist = dist_img[np.clip(uv[:, 1], 0, h - 1), np.clip(uv[:, 0], 0, w - 1)]
+        p_b[inside] *= _gauss(dist.astype(np.float64), sigma_px)
+    return p_b
+
+
+def _merge(
+    points_m: np.ndarray, prior: np.ndarray, radius_m: float, boost: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Greedy merge, strongest first: each kept candidate absorbs the not yet absorbed ones
+    within ``radius_m`` and gains ``boost`` times their priors (clipped to 1).
+
+    Returns indices of the kept candidates (strongest first) and their boosted priors."""
+    order = np.argsort(-prior, kind="stable")
+    pts = points_m[order]
+    pri = prior[order]
+    close = np.einsum("ijk,ijk->ij", pts[:, None] - pts[None], pts[:, None] - pts[None])
+    close = close < radius_m * radius_m
+    alive = np.ones(len(pts), dtype=bool)
+    kept, kept_prior = [], []
+    for i in range(len(pts)):
+        if not alive[i]:
+            continue
+        absorbed = close[i] & alive
+        absorbed[i] = False
+        alive[absorbed] = False
+        alive[i] = False
+        kept.append(i)
+        kept_prior.append(min(1.0, pri[i] + boost * pri[absorbed].sum()))
+    return order[np.array(kept, dtype=np.intp)], np.array(kept_prior)
+
+
+def make_candidates(
+    observations: Sequence[CameraObservation], rig: Rig, cfg: CandidateConfig
+) -> CandidateSet:
+    """3-D candidate points of one frame set with their priors p(Z).
+
+    Parameters
+    ----------
+    observations : sequence of CameraObservation
+        One per camera with a frame in this set (at most one per camera); cameras of the rig
+        with no observation take no part (neither in pairs nor in p_b).
+    rig : Rig
+        The calibrated cameras; every ``observation.camera`` must be one of them.
+    cfg : CandidateConfig
+        Widths, thresholds and merging.
+
+    Returns
+    -------
+    CandidateSet
+        ``points_m (K, 3)``, ``prior (K,)`` in (0, 1], ``half_gap_m (K,)``, ``cam_pairs (K, 2)``
+        (rig camera indices, m < m'), ``blob_pairs (K, 2)`` (blob indices in those cameras),
+        strongest first. Empty (``(0, 3)``) when fewer than two cameras see blobs.
+
+    Raises
+    ------
+    ValueError
+        If an observation names a camera missing from the rig, or a camera twice.
+
+    Notes
+    -----
+    A candidate survives if it lies in front of both cameras, at ``z >= cfg.min_z_m``, has
+    ``d <= cfg.max_gap_m``, each of p_o (eq. 25), p_t (eq. 26), p_b (eq. 27) reaches
+    ``cfg.term_threshold`` and their product (eq. 19) reaches ``cfg.prior_threshold``.
+    p_o assumes that higher points have smaller v in every camera (cameras high up, looking
+    down). Survivors closer than ``cfg.merge_radius_m`` are merged, strongest first.
+
+    References
+    ----------
+    Paper 004, section 5.1 (eq. 18-19), section 6.3 (eq. 22-24), section 6.4 (eq. 25-27).
+    """
+    index = {name: m for m, name in enumerate(rig.names)}
+    by_cam: dict[int, CameraObservation] = {}
+    for i, obs in enumerate(observations):
+        if obs.camera not in index:
+            raise ValueError(
+                f"observations[{i}].camera {obs.camera!r} is not in the rig "
+                f"(cameras: {', '.join(rig.names)})"
+            )
+        m = index[obs.camera]
+        if m in by_cam:
+            raise ValueError(f"observations[{i}]: camera {obs.camera!r} appears twice")
+        by_cam[m] = obs
+
+    # one back-projection per camera for all its blobs
+    seen = sorted(m for m, obs in by_cam.items() if len(obs.blobs) > 0)
+    if len(seen) < 2:
+        return _empty()
+    origins, dirs, rel_v, cam_of, blob_of = [], [], [], [], []
+    for m in seen:
+        blobs = by_cam[m].blobs
+        origin, d = rig.cameras[m].backproject(blobs.centroids_px)
+        n = len(blobs)
+        origins.append(np.broadcast_to(origin, (n, 3)))
+        dirs.append(d)
+        rel_v.append(blobs.rel_v)
+        cam_of.append(np.full(n, m, dtype=np.int64))
+        blob_of.append(np.arange(n, dtype=np.int64))
+    origins_all = np.concatenate(origins)
+    dirs_all = np.concatenate(dirs)
+    rel_v_all = np.concatenate(rel_v)
+    cam_all = np.concatenate(cam_of)
+    blob_all = np.concatenate(blob_of)
+    starts = np.cumsum([0] + [len(d) for d in dirs])
+
+    # eq. 18: every blob pair of every camera pair m < m' (global blob indices ia, ib)
+    ia_parts, ib_parts = [], []
+    for a in range(len(seen)):
+        for b in range(a + 1, len(seen)):
+            ga = np.arange(starts[a], starts[a + 1])
+            gb = np.arange(starts[b], starts[b + 1])
+            ia_parts.append(np.repeat(ga, len(gb)))
+            ib_parts.append(np.tile(gb, len(ga)))
+    ia = np.concatenate(ia_parts)
+    ib = np.concatenate(ib_parts)
+
+    # eq. 22-24
+    o1, d1, o2, d2 = origins_all[ia], dirs_all[ia], origins_all[ib], dirs_all[ib]
+    points, half_gap = closest_points(o1, d1, o2, d2)
+    # in front of both cameras: the midpoint's position along each (unit) line of sight
+    with np.errstate(invalid="ignore"):
+        ahead1 = np.einsum("ij,ij->i", points - o1, d1) > 0
+        ahead2 = np.einsum("ij,ij->i", points - o2, d2) > 0
+        geometric = ahead1 & ahead2 & (half_gap <= cfg.max_gap_m) & (points[:, 2] >= cfg.min_z_m)
+    # eq. 25 (relative v consistency) and eq. 26 (reconstruction error)
+    p_o = _gauss(rel_v_all[ia] - rel_v_all[ib], cfg.sigma_rel_v)
+    p_t = _gauss(half_gap, cfg.sigma_gap_m)
+    keep = geometric & (p_o >= cfg.term_threshold) & (p_t >= cfg.term_threshold)
+    keep &= p_o * p_t >= cfg.prior_threshold  # p_b <= 1 cannot raise the product
+    if not keep.any():
+        return _empty()
+    ia, ib, points, half_gap = ia[keep], ib[keep], points[keep], half_gap[keep]
+    # eq. 27 (silhouette consistency) on the survivors only
+    p_b = _silhouette_prior(points, rig, by_cam, cfg.sigma_silhouette_px)
+    prior = p_o[keep] * p_t[keep] * p_b  # eq. 19
+    ok = (p_b >= cfg.term_threshold) & (prior >= cfg.prior_threshold)
+    ia, ib, points, half_gap, prior = ia[ok], ib[ok], points[ok], half_gap[ok], prior[ok]
+    if len(points) == 0:
+        return _empty()
+
+    kept, prior = _merge(points, prior, cfg.merge_radius_m, cfg.merge_boost)
+    log.debug(
+        "candidates: %d pairs, %d pass the prior, %d after merging", len(keep), ok.size, len(kept)
+    )
+    ia, ib = ia[kept], ib[kept]
+    return CandidateSet(
+        points[kept],
+        prior,
+        half_gap_m=half_gap[kept],
+        cam_pairs=np.column_stack([cam_all[ia], cam_all[ib]]),
+        blob_pairs=np.column_stack([blob_all[ia], blob_all[ib]]),
+    )

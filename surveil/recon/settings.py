@@ -1,0 +1,44 @@
+"""Settings of the 3-D candidate stage (paper 004 eq. 19, 25-27; docs/candidates.md).
+
+The widths are provisional: chosen from the expected calibration and centroid errors, to be
+tuned on synthetic recordings with the benchmark.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from surveil.config import setting
+
+
+@dataclass(frozen=True, slots=True)
+class CandidateConfig:
+    """Widths, thresholds and merging of the candidate prior p(Z) = p_o * p_t * p_b."""
+
+    sigma_rel_v: float = setting(
+        0.1, "p_o width (eq. 25): std of the relative-v difference, unitless", min=1e-6
+    )
+    sigma_gap_m: float = setting(
+        0.03, "p_t width (eq. 26): std of the half gap d between lines of sight, m", min=1e-6
+    )
+    sigma_silhouette_px: float = setting(
+        6.0, "p_b width (eq. 27): std of the distance outside a silhouette, px", min=1e-6
+    )
+    term_threshold: float = setting(
+        0.1, "each of p_o, p_t, p_b must reach this (paper: 0.1)", min=0.0, max=1.0
+    )
+    prior_threshold: float = setting(
+        0.1, "p(Z) = p_o * p_t * p_b must reach this (paper: 0.1)", min=0.0, max=1.0
+    )
+    merge_radius_m: float = setting(
+        0.08, "candidates closer than this merge into the stronger one, m", min=0.0
+    )
+    merge_boost: float = setting(
+        0.5, "fraction of a merged (weaker) prior added to the stronger one", min=0.0, max=1.0
+    )
+    max_gap_m: float = setting(
+        0.1, "candidates with a larger half gap d are dropped outright, m", min=0.0
+    )
+    min_z_m: float = setting(
+        -0.05, "candidates below this height (under the floor) are dropped, m", max=0.0
+    )

@@ -1,0 +1,209 @@
+"""make_candidates on small hand-built observations (320x240 cameras high in a 6 x 4 m room)."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from surveil.camera import Camera, Rig, look_at
+from surveil.config import from_table
+from surveil.datatypes import BlobSet, CameraObservation, CandidateSet, Silhouettes
+from surveil.errors import ConfigError
+from surveil.recon.candidates import _merge, make_candidates
+from surveil.recon.settings import CandidateConfig
+
+W, H = 320, 240
+CFG = CandidateConfig()
+
+
+def _rig(n: int = 4) -> Rig:
+    corners = [(0.0, 0.0), (6.0, 0.0), (6.0, 4.0), (0.0, 4.0)][:n]
+    return Rig(
+        tuple(
+            look_at(
+                f"cam{i}",
+                np.array([x, y, 2.8]),
+                np.array([3.0, 2.0, 1.0]),
+                width=W,
+                height=H,
+                hfov_deg=80,
+            )
+            for i, (x, y) in enumerate(corners)
+        )
+    )
+
+
+def _silhouettes(centres_px: np.ndarray, radius_px: int = 20) -> Silhouettes:
+    mask = np.zeros((H, W), np.uint8)
+    for u, v in np.rint(centres_px).astype(int):
+        cv2.circle(mask, (int(u), int(v)), radius_px, 255, -1)
+    n, labels = cv2.connectedComponents(mask)
+    rows = np.arange(H)
+    top = np.array([rows[(labels == s).any(axis=1)].min() for s in range(1, n)], np.float64)
+    bottom = np.array([rows[(labels == s).any(axis=1)].max() for s in range(1, n)], np.float64)
+    dist = cv2.distanceTransform((mask == 0).astype(np.uint8), cv2.DIST_L2, 5)
+    if n == 1:
+        dist = np.full((H, W), 1e4, np.float32)
+    return Silhouettes(labels.astype(np.int32), top, bottom, dist)
+
+
+def _observation(
+    cam: Camera,
+    points_m: np.ndarray,
+    *,
+    rel_v: np.ndarray | None = None,
+    silhouette_at_m: np.ndarray | None = None,
+) -> CameraObservation:
+    """Blobs at the projections of ``points_m``; silhouettes are disks around the projections
+    of ``silhouette_at_m`` (default: the blob points). rel_v defaults to a function of height,
+    so the same 3-D point has the same rel_v in every camera."""
+    points_m = np.asarray(points_m, np.float64).reshape(-1, 3)
+    px, _ = cam.project(points_m)
+    sil_px = cam.project(points_m if silhouette_at_m is None else silhouette_at_m)[0]
+    n = len(points_m)
+    rel = (2.0 - points_m[:, 2]) / 2.0 if rel_v is None else np.asarray(rel_v, np.float64)
+    blobs = BlobSet(
+        centroids_px=px,
+        areas_px=np.full(n, 50, np.int64),
+        bboxes_px=np.zeros((n, 4), np.int32),
+        silhouette=np.ones(n, np.int32),
+        rel_v=rel,
+        labels=np.zeros((H, W), np.int32),
+    )
+    return CameraObservation(cam.name, _silhouettes(sil_px), np.zeros((H, W), bool), blobs)
+
+
+HEAD = np.array([[3.0, 2.0, 1.7]])
+
+
+def test_three_targets_seen_by_four_cameras_are_the_strongest_candidates():
+    rig = _rig()
+    targets = np.array([[2.5, 1.5, 1.6], [3.6, 2.5, 1.1], [3.0, 1.2, 1.3]])
+    obs = [_observation(cam, targets) for cam in rig]
+    cs = make_candidates(obs, rig, CFG)
+    assert isinstance(cs, CandidateSet)
+    assert np.all(np.diff(cs.prior) <= 0)  # strongest first
+    best = cs.points_m[:3]
+    order = np.argsort(best[:, 0])
+    np.testing.assert_allclose(best[order], targets[np.argsort(targets[:, 0])], atol=1e-6)
+    np.testing.assert_allclose(cs.prior[:3], 1.0)
+    assert np.all(cs.half_gap_m[:3] < 1e-6)
+    assert np.all(cs.blob_pairs[:3, 0] == cs.blob_pairs[:3, 1])  # true correspondences
+    assert np.all(cs.cam_pairs[:, 0] < cs.cam_pairs[:, 1])
+    # ghosts of two nearly coplanar views (cam0, cam3) may survive, but weakly
+    ghosts = cs.blob_pairs[3:]
+    assert np.all(ghosts[:, 0] != ghosts[:, 1]) and np.all(cs.prior[3:] < 0.5)
+
+
+def test_mismatched_relative_v_makes_p_o_small():
+    rig = _rig(2)
+    obs = [
+        _observation(rig.cameras[0], HEAD, rel_v=np.array([0.2])),
+        _observation(rig.cameras[1], HEAD, rel_v=np.array([0.8])),
+    ]
+    assert len(make_candidates(obs, rig, CFG).points_m) == 0
+    # a small mismatch passes with p(Z) = p_o = exp(-dv^2 / (2 sigma^2))
+    obs[1] = _observation(rig.cameras[1], HEAD, rel_v=np.array([0.35]))
+    cs = make_candidates(obs, rig, CFG)
+    np.testing.assert_allclose(cs.prior, [np.exp(-0.5 * (0.15 / CFG.sigma_rel_v) ** 2)])
+
+
+def test_blobs_of_different_points_have_a_large_gap_and_are_dropped():
+    rig = _rig(2)
+    other = HEAD + np.array([[0.0, 0.6, 0.0]])  # same height: p_o cannot reject the pair
+    obs = [_observation(rig.cameras[0], HEAD), _observation(rig.cameras[1], other)]
+    assert len(make_candidates(obs, rig, CFG).points_m) == 0
+    lenient = CandidateConfig(term_threshold=0.0, prior_threshold=0.0, max_gap_m=10.0)
+    cs = make_candidates(obs, rig, lenient)
+    assert cs.half_gap_m[0] > CFG.max_gap_m
+    p_t = np.exp(-0.5 * (cs.half_gap_m[0] / CFG.sigma_gap_m) ** 2)
+    assert cs.prior[0] <= p_t < 1e-3
+
+
+def test_point_projecting_outside_a_silhouette_makes_p_b_small():
+    rig = _rig(3)
+    cam2 = rig.cameras[2]
+    elsewhere = HEAD + np.array([[0.0, 0.0, -0.8]])  # cam2's silhouette is 0.8 m lower
+    obs = [
+        _observation(rig.cameras[0], HEAD),
+        _observation(rig.cameras[1], HEAD),
+        _observation(cam2, np.zeros((0, 3)), silhouette_at_m=elsewhere),
+    ]
+    assert len(make_candidates(obs, rig, CFG).points_m) == 0
+    lenient = CandidateConfig(term_threshold=0.0, prior_threshold=0.0)
+    cs = make_candidates(obs, rig, lenient)
+    u, v = np.rint(cam2.project(HEAD)[0][0]).astype(int)
+    dist = float(obs[2].silhouettes.dist_outside_px[v, u])
+    assert dist > 10
+    np.testing.assert_allclose(
+        cs.prior, [np.exp(-0.5 * (dist / CFG.sigma_silhouette_px) ** 2)], rtol=1e-9
+    )
+    # without cam2's observation it is not consulted and the candidate is perfect
+    np.testing.assert_allclose(make_candidates(obs[:2], rig, CFG).prior, [1.0])
+
+
+def test_pairs_of_one_point_merge_into_the_strongest_with_a_boosted_prior():
+    rig = _rig(3)
+    obs = [
+        _observation(cam, HEAD, rel_v=np.array([rv]))
+        for cam, rv in zip(rig, (0.5, 0.6, 0.7), strict=True)
+    ]
+    cs = make_candidates(obs, rig, CFG)
+    strong = np.exp(-0.5)  # |dv| = 0.1 = sigma for pairs (0, 1) and (1, 2)
+    weak = np.exp(-2.0)  # |dv| = 0.2 for pair (0, 2)
+    assert cs.points_m.shape == (1, 3)
+    np.testing.assert_allclose(cs.prior, [strong + CFG.merge_boost * (strong + weak)])
+    np.testing.assert_array_equal(cs.cam_pairs, [[0, 1]])  # first of the tied strongest
+    np.testing.assert_array_equal(cs.blob_pairs, [[0, 0]])
+
+
+def test_merge_keeps_the_stronger_of_close_candidates_and_clips_to_one():
+    pts = np.array([[0.0, 0, 1], [0.01, 0, 1], [1.0, 0, 1], [1.0, 0.005, 1]])
+    kept, prior = _merge(pts, np.array([0.3, 0.6, 0.9, 0.8]), radius_m=0.05, boost=0.5)
+    np.testing.assert_array_equal(kept, [2, 1])
+    np.testing.assert_allclose(prior, [1.0, 0.75])
+    kept, prior = _merge(pts[[0, 2]], np.array([0.3, 0.6]), radius_m=0.05, boost=0.5)
+    np.testing.assert_array_equal(kept, [1, 0])
+    np.testing.assert_allclose(prior, [0.6, 0.3])
+
+
+@pytest.mark.parametrize("n_cams, n_blobs", [(0, 1), (1, 3), (4, 0), (2, 0)])
+def test_empty_inputs_give_an_empty_candidate_set(n_cams, n_blobs):
+    rig = _rig(4)
+    pts = np.tile(HEAD, (n_blobs, 1)) + np.arange(n_blobs)[:, None] * 0.3
+    cs = make_candidates([_observation(cam, pts) for cam in rig.cameras[:n_cams]], rig, CFG)
+    assert cs.points_m.shape == (0, 3) and cs.prior.shape == (0,)
+    assert cs.cam_pairs.shape == (0, 2) and cs.blob_pairs.shape == (0, 2)
+
+
+def test_points_behind_or_below_are_dropped():
+    rig = _rig(2)
+    below = np.array([[3.0, 2.0, -0.3]])
+    obs = [_observation(cam, below) for cam in rig]
+    assert len(make_candidates(obs, rig, CFG).points_m) == 0
+
+
+def test_is_deterministic(rng):
+    rig = _rig()
+    targets = rng.uniform([2.0, 1.0, 0.8], [4.0, 3.0, 1.8], size=(6, 3))
+    obs = [_observation(cam, targets) for cam in rig]
+    a, b = make_candidates(obs, rig, CFG), make_candidates(obs, rig, CFG)
+    for name in ("points_m", "prior", "half_gap_m", "cam_pairs", "blob_pairs"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+
+
+def test_unknown_camera_is_named():
+    rig = _rig(2)
+    obs = [_observation(rig.cameras[0], HEAD)]
+    stray = CameraObservation("nope", obs[0].silhouettes, obs[0].skin, obs[0].blobs)
+    with pytest.raises(ValueError, match="'nope'"):
+        make_candidates([*obs, stray], rig, CFG)
+    with pytest.raises(ValueError, match="twice"):
+        make_candidates([obs[0], obs[0]], rig, CFG)
+
+
+def test_config_rejects_out_of_range_values_by_key():
+    with pytest.raises(ConfigError, match="recon.sigma_gap_m must be >= "):
+        from_table(CandidateConfig, {"sigma_gap_m": 0.0}, "run.toml: recon")
+    assert from_table(CandidateConfig, {"merge_boost": 0.2}, "x").merge_boost == 0.2
