@@ -1,0 +1,141 @@
+"""Benchmark the per-camera observations and 3D candidates (issue 3) on synthetic recordings.
+
+    python benchmarks/candidates_bench.py [--out out/bench_synth] [--max-frames N] [NAME ...]
+
+Renders (or reuses) every bundled scenario, runs background subtraction, skin
+classification, blob extraction and candidate generation with the default settings on the
+recording's own (slightly wrong) calibration, and reports against the ground truth:
+
+- candidate recall: fraction of true heads and hands seen by >= 2 cameras with a candidate
+  within 50 mm and within 100 mm;
+- false candidates per frame set: candidates farther than 100 mm from every true limb;
+- mean distance of the candidates matched to true limbs (nearest within 100 mm), mm;
+- skin pixel precision and recall against the ground-truth masks (frames with masks);
+- milliseconds per camera frame for background, skin, blobs, and per frame set for
+  candidates (medians).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from surveil.blobs.background import BackgroundModel
+from surveil.blobs.extract import extract_blobs
+from surveil.blobs.settings import BackgroundConfig, BlobConfig
+from surveil.blobs.skin import default_skin_model
+from surveil.datatypes import CameraObservation
+from surveil.io.ground_truth import MaskClass, load_ground_truth
+from surveil.io.recording import open_recording
+from surveil.recon.candidates import make_candidates
+from surveil.recon.settings import CandidateConfig
+from surveil.synth.scene import synthesise
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def bench_recording(rec_dir: Path, max_frames: int | None) -> dict:
+    rec = open_recording(rec_dir)
+    gt = load_ground_truth(rec_dir)
+    bg_cfg, blob_cfg, cand_cfg = BackgroundConfig(), BlobConfig(), CandidateConfig()
+    skin_model = default_skin_model()
+    models = {}
+    times: dict[str, list[float]] = {"background": [], "skin": [], "blobs": [], "candidates": []}
+    found50 = found100 = countable = false = n_sets = 0
+    dists: list[float] = []
+    tp = fp = fn = 0
+    for fs in rec.framesets(stop=max_frames):
+        observations = []
+        for cam in rec.camera_names:
+            img = fs.images.get(cam)
+            if img is None:
+                continue
+            if cam not in models:
+                models[cam] = BackgroundModel(bg_cfg, img.shape[:2])
+            t0 = time.perf_counter()
+            sil = models[cam].step(img)
+            t1 = time.perf_counter()
+            skin = skin_model.classify(img)
+            t2 = time.perf_counter()
+            blobs = extract_blobs(skin, sil, blob_cfg)
+            t3 = time.perf_counter()
+            times["background"].append(t1 - t0)
+            times["skin"].append(t2 - t1)
+            times["blobs"].append(t3 - t2)
+            observations.append(CameraObservation(cam, sil, skin, blobs))
+            mask_path = rec_dir / "ground_truth" / "masks" / cam / f"{fs.index:06d}.png"
+            if fs.index >= bg_cfg.learning_frames and mask_path.exists():
+                truth = cv2.imread(str(mask_path))[..., 0] == MaskClass.SKIN
+                pred = skin & sil.mask
+                tp += int(np.count_nonzero(pred & truth))
+                fp += int(np.count_nonzero(pred & ~truth))
+                fn += int(np.count_nonzero(~pred & truth))
+        t0 = time.perf_counter()
+        cands = make_candidates(observations, rec.rig, cand_cfg)
+        times["candidates"].append(time.perf_counter() - t0)
+        if fs.index < bg_cfg.learning_frames:
+            continue  # the background model is still learning
+        n_sets += 1
+        i = int(np.searchsorted(gt.frames, fs.index))
+        truth_pos = gt.positions_m[i]
+        present = np.isfinite(truth_pos).all(axis=1)
+        seen2 = present & (gt.n_views[i] >= 2)
+        if len(cands.points_m):
+            d = np.linalg.norm(cands.points_m[:, None, :] - truth_pos[None, present, :], axis=2)
+            nearest_true = d.min(axis=0)  # per true limb
+            countable += int(seen2.sum())
+            found50 += int((nearest_true[seen2[present]] < 0.05).sum())
+            found100 += int((nearest_true[seen2[present]] < 0.10).sum())
+            nearest_cand = d.min(axis=1)
+            false += int((nearest_cand > 0.10).sum())
+            dists.extend(nearest_true[nearest_true < 0.10].tolist())
+        else:
+            countable += int(seen2.sum())
+    return {
+        "recall50": found50 / max(countable, 1),
+        "recall100": found100 / max(countable, 1),
+        "false_per_set": false / max(n_sets, 1),
+        "limbs_per_set": countable / max(n_sets, 1),
+        "mean_mm": 1000 * float(np.mean(dists)) if dists else float("nan"),
+        "skin_precision": tp / max(tp + fp, 1),
+        "skin_recall": tp / max(tp + fn, 1),
+        **{f"{k}_ms": 1000 * float(np.median(v)) for k, v in times.items()},
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("names", nargs="*")
+    parser.add_argument("--out", type=Path, default=ROOT / "out" / "bench_synth")
+    parser.add_argument("--max-frames", type=int, default=None)
+    args = parser.parse_args(argv)
+    paths = [ROOT / "recordings" / f"{n}.toml" for n in args.names] or sorted(
+        (ROOT / "recordings").glob("*.toml")
+    )
+    print(
+        "| scenario | recall 50 mm | recall 100 mm | false / set | true limbs / set "
+        "| mean dist mm | skin P | skin R | bg ms | skin ms | blobs ms | cand ms |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for path in paths:
+        rec_dir = args.out / path.stem
+        synthesise(path, rec_dir)
+        r = bench_recording(rec_dir, args.max_frames)
+        print(
+            f"| {path.stem} | {r['recall50']:.3f} | {r['recall100']:.3f} "
+            f"| {r['false_per_set']:.2f} | {r['limbs_per_set']:.2f} | {r['mean_mm']:.0f} "
+            f"| {r['skin_precision']:.3f} | {r['skin_recall']:.3f} "
+            f"| {r['background_ms']:.2f} | {r['skin_ms']:.2f} | {r['blobs_ms']:.2f} "
+            f"| {r['candidates_ms']:.2f} |",
+            flush=True,
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,113 @@
+"""Skin blobs inside person silhouettes (paper 004 section 6.2)."""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+
+from surveil.blobs.background import BackgroundModel
+from surveil.blobs.settings import BlobConfig
+from surveil.blobs.skin import SkinModel
+from surveil.datatypes import BlobSet, CameraObservation, Silhouettes
+from surveil.validate import require_shape
+
+
+def _empty_blobs(shape: tuple[int, int]) -> BlobSet:
+    return BlobSet(
+        np.zeros((0, 2)),
+        np.zeros(0, np.int64),
+        np.zeros((0, 4), np.int32),
+        np.zeros(0, np.int32),
+        np.zeros(0),
+        np.zeros(shape, np.int32),
+    )
+
+
+def extract_blobs(
+    skin: np.ndarray,
+    silhouettes: Silhouettes,
+    cfg: BlobConfig,
+    n_people_hint: int | None = None,
+) -> BlobSet:
+    """Connected skin regions inside silhouettes, the ceil(lambda * 3 * N_h) largest.
+
+    Parameters
+    ----------
+    skin : (H, W) bool skin pixels
+    silhouettes : Silhouettes of the same frame (same H, W)
+    cfg : BlobConfig (``min_blob_area_px``, ``blob_excess`` = lambda, ``silhouette_dilate_px``)
+    n_people_hint : N_h; default the number of silhouettes; at least 1
+
+    Returns
+    -------
+    BlobSet
+        Largest first. ``silhouette`` is the majority (dilated) silhouette label under the
+        blob; ``rel_v`` = (v - top) / (bottom - top) of that silhouette (0 at its top).
+
+    >>> sk = np.zeros((10, 10), bool); sk[2:4, 2:4] = True
+    >>> lab = np.zeros((10, 10), np.int32); lab[1:9, 1:6] = 1
+    >>> sil = Silhouettes(lab, np.array([1.0]), np.array([8.0]), np.zeros((10, 10), np.float32))
+    >>> b = extract_blobs(sk, sil, BlobConfig(min_blob_area_px=1, silhouette_dilate_px=0))
+    >>> b.centroids_px.tolist(), b.areas_px.tolist(), b.rel_v.round(3).tolist()
+    ([[2.5, 2.5]], [4], [0.214])
+    """
+    require_shape("skin", skin, silhouettes.labels.shape, np.bool_)
+    shape = skin.shape
+    sil = silhouettes.labels
+    if cfg.silhouette_dilate_px > 0 and silhouettes.n:
+        d = 2 * cfg.silhouette_dilate_px + 1
+        kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (d, d))
+        # grey dilation grows every label (overlaps go to the larger label)
+        sil = cv2.dilate(sil.astype(np.uint16), kernel).astype(np.int32)
+    inside = skin & (sil > 0)
+    n_all, labels, stats, centroids = cv2.connectedComponentsWithStats(
+        inside.view(np.uint8), connectivity=8
+    )
+    areas = stats[1:, cv2.CC_STAT_AREA].astype(np.int64)
+    ok = np.flatnonzero(areas >= max(cfg.min_blob_area_px, 1))
+    n_h = max(n_people_hint if n_people_hint is not None else silhouettes.n, 1)
+    n_keep = math.ceil(cfg.blob_excess * 3 * n_h)
+    order = ok[np.argsort(-areas[ok], kind="stable")][:n_keep]  # 0-based blob index
+    if len(order) == 0:
+        return _empty_blobs(shape)
+    comp = order + 1  # OpenCV component ids
+    # majority silhouette label under each kept blob
+    n_sil = int(sil.max()) + 1
+    sel = np.isin(labels, comp)
+    remap = np.zeros(n_all, np.int64)
+    remap[comp] = np.arange(len(comp))
+    votes = np.zeros((len(comp), n_sil), np.int64)
+    np.add.at(votes, (remap[labels[sel]], sil[sel]), 1)
+    votes[:, 0] = -1
+    sil_of = votes.argmax(axis=1).astype(np.int32)
+    cents = centroids[comp].astype(np.float64)
+    top = np.asarray(silhouettes.top_v_px)[sil_of - 1]
+    bottom = np.asarray(silhouettes.bottom_v_px)[sil_of - 1]
+    rel_v = (cents[:, 1] - top) / np.maximum(bottom - top, 1.0)
+    out_labels = np.zeros(n_all, np.int32)
+    out_labels[comp] = np.arange(1, len(comp) + 1, dtype=np.int32)
+    return BlobSet(
+        cents,
+        areas[order],
+        stats[comp, :4].astype(np.int32),
+        sil_of,
+        rel_v,
+        out_labels[labels],
+    )
+
+
+def observe(
+    bgr: np.ndarray,
+    background_model: BackgroundModel,
+    skin_model: SkinModel,
+    cfg: BlobConfig,
+    camera: str,
+    n_people_hint: int | None = None,
+) -> CameraObservation:
+    """One camera frame -> silhouettes (updating ``background_model``), skin, blobs."""
+    silhouettes = background_model.step(bgr)
+    skin = skin_model.classify(bgr)
+    blobs = extract_blobs(skin, silhouettes, cfg, n_people_hint)
+    return CameraObservation(camera, silhouettes, skin, blobs)

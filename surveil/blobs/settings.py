@@ -1,0 +1,46 @@
+"""Configuration of the per-camera blob stage (paper 004 sections 6.1-6.2).
+
+Frozen dataclasses built with :func:`surveil.config.setting`, so :func:`surveil.config.
+from_table` validates them from TOML. (To be moved into ``surveil/config.py``.)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from surveil.config import setting
+
+
+@dataclass(frozen=True)
+class BackgroundConfig:
+    """Background subtraction and person silhouettes (section 6.1)."""
+
+    history_frames: int = setting(300, "MOG2 history length, frames", min=1)
+    var_threshold: float = setting(16.0, "MOG2 squared Mahalanobis threshold", min=0.0)
+    learning_frames: int = setting(30, "frames of the initial learning phase", min=0)
+    learning_rate_initial: float = setting(
+        -1.0, "MOG2 rate during learning (-1 = automatic 1/n)", min=-1.0, max=1.0
+    )
+    learning_rate: float = setting(0.002, "MOG2 rate after learning", min=0.0, max=1.0)
+    open_px: int = setting(3, "elliptical opening kernel diameter, px (0 = none)", min=0)
+    close_px: int = setting(9, "elliptical closing kernel diameter, px (0 = none)", min=0)
+    min_person_area_px: int = setting(400, "smallest silhouette kept, px", min=0)
+
+
+@dataclass(frozen=True)
+class SkinConfig:
+    """Skin classifier training and its lookup table (section 6.2)."""
+
+    lut_bits: int = setting(6, "bits per BGR channel of the lookup table (5 or 6)", min=5, max=6)
+    threshold: float = setting(0.5, "skin probability threshold", min=0.0, max=1.0)
+    max_iter: int = setting(200, "boosting iterations of the classifier", min=1)
+    max_train_pixels: int = setting(200_000, "training pixels kept (random subset)", min=100)
+
+
+@dataclass(frozen=True)
+class BlobConfig:
+    """Skin blobs inside silhouettes (section 6.2)."""
+
+    min_blob_area_px: int = setting(20, "smallest blob kept, px", min=0)
+    blob_excess: float = setting(1.5, "lambda: keep ceil(lambda * 3 * N_h) largest", min=1.0)
+    silhouette_dilate_px: int = setting(3, "grow silhouettes by this radius, px", min=0)

@@ -1,0 +1,76 @@
+import numpy as np
+import pytest
+
+from surveil.blobs import BackgroundConfig, BackgroundModel
+
+H, W = 120, 160
+
+
+def _scene(rng):
+    base = np.full((H, W, 3), 120, np.uint8)
+    base[:, W // 2 :] = (60, 140, 200)
+    return base, lambda: np.clip(base + rng.normal(0, 2, base.shape), 0, 255).astype(np.uint8)
+
+
+def _learn(model, frame, n=30):
+    for _ in range(n):
+        model.step(frame())
+
+
+def test_moving_rectangle_gives_one_silhouette_in_place(rng):
+    cfg = BackgroundConfig(learning_frames=20, min_person_area_px=100)
+    model = BackgroundModel(cfg, (H, W))
+    _, frame = _scene(rng)
+    _learn(model, frame)
+    for x in range(20, 60, 4):
+        img = frame()
+        img[30:90, x : x + 20] = (20, 200, 40)
+        sil = model.step(img)
+    assert sil.n == 1
+    assert sil.top_v_px[0] == pytest.approx(30, abs=2)
+    assert sil.bottom_v_px[0] == pytest.approx(89, abs=2)
+    assert sil.labels[60, x + 10] == 1 and sil.labels[60, 130] == 0
+    assert sil.dist_outside_px[60, x + 10] == 0
+    assert sil.dist_outside_px[60, x + 40] == pytest.approx(20, abs=2)
+    assert sil.labels.dtype == np.int32 and sil.dist_outside_px.dtype == np.float32
+
+
+def test_shadow_is_background(rng):
+    model = BackgroundModel(BackgroundConfig(learning_frames=20), (H, W))
+    base, frame = _scene(rng)
+    _learn(model, frame)
+    img = frame()
+    img[40:100, 10:70] = (img[40:100, 10:70] * 0.65).astype(np.uint8)  # darkened, same hue
+    assert model.step(img).n == 0
+
+
+def test_empty_scene_has_no_silhouette_and_large_distances(rng):
+    model = BackgroundModel(BackgroundConfig(learning_frames=5), (H, W))
+    _, frame = _scene(rng)
+    for _ in range(10):
+        sil = model.step(frame())
+    assert sil.n == 0 and sil.top_v_px.shape == (0,)
+    assert not sil.mask.any()
+    assert (sil.dist_outside_px >= np.hypot(H, W) - 1).all()
+
+
+def test_learning_phase_then_slow_rate_keeps_a_standing_person(rng):
+    cfg = BackgroundConfig(learning_frames=10, learning_rate=0.001, min_person_area_px=100)
+    model = BackgroundModel(cfg, (H, W))
+    _, frame = _scene(rng)
+    assert model.learning
+    _learn(model, frame, 10)
+    assert not model.learning
+    for _ in range(40):  # the person stands still for 40 frames: not absorbed at rate 0.001
+        img = frame()
+        img[30:90, 40:60] = (20, 200, 40)
+        sil = model.step(img)
+    assert sil.n == 1
+    model.reset()
+    assert model.learning and model.n_frames == 0
+
+
+def test_wrong_frame_shape_names_argument():
+    model = BackgroundModel(BackgroundConfig(), (H, W))
+    with pytest.raises(ValueError, match="bgr"):
+        model.step(np.zeros((H + 1, W, 3), np.uint8))

@@ -1,0 +1,65 @@
+import math
+
+import numpy as np
+import pytest
+
+from surveil.blobs import BlobConfig, extract_blobs, silhouettes_from_mask
+
+H, W = 100, 120
+
+
+def _one_person():
+    m = np.zeros((H, W), bool)
+    m[10:91, 20:80] = True  # top 10, bottom 90
+    return silhouettes_from_mask(m, 10)
+
+
+def test_keeps_ceil_lambda_3n_largest_and_drops_small():
+    sil = _one_person()
+    skin = np.zeros((H, W), bool)
+    sizes = [9, 8, 7, 6, 5, 4, 2]  # squares: areas 81..4 px
+    for i, s in enumerate(sizes):
+        skin[12 + 11 * i : 12 + 11 * i + s, 25 : 25 + s] = True
+    cfg = BlobConfig(min_blob_area_px=10, blob_excess=1.5, silhouette_dilate_px=0)
+    blobs = extract_blobs(skin, sil, cfg)
+    assert len(blobs) == math.ceil(1.5 * 3 * 1) == 5
+    assert blobs.areas_px.tolist() == [81, 64, 49, 36, 25]
+    blobs = extract_blobs(skin, sil, cfg, n_people_hint=2)  # ceil(9) = 9: only the size cut
+    assert blobs.areas_px.tolist() == [81, 64, 49, 36, 25, 16]
+    assert blobs.labels.max() == 6 and (blobs.labels == 1).sum() == 81
+
+
+def test_ignores_skin_outside_silhouettes_and_computes_rel_v():
+    sil = _one_person()
+    skin = np.zeros((H, W), bool)
+    skin[48:53, 40:45] = True  # centre row 50 -> rel_v (50 - 10) / 80 = 0.5
+    skin[40:60, 90:110] = True  # outside
+    blobs = extract_blobs(skin, sil, BlobConfig(min_blob_area_px=1, silhouette_dilate_px=0))
+    assert len(blobs) == 1
+    assert blobs.centroids_px[0] == pytest.approx([42.0, 50.0])
+    assert blobs.rel_v[0] == pytest.approx(0.5)
+    assert blobs.silhouette.tolist() == [1]
+    assert blobs.bboxes_px[0].tolist() == [40, 48, 5, 5]
+
+
+def test_dilation_takes_in_skin_just_outside_the_silhouette():
+    sil = _one_person()
+    skin = np.zeros((H, W), bool)
+    skin[40:45, 80:83] = True  # just right of the silhouette (last column 79)
+    cfg = BlobConfig(min_blob_area_px=1, silhouette_dilate_px=3)
+    assert len(extract_blobs(skin, sil, cfg)) == 1
+    no_dilation = BlobConfig(min_blob_area_px=1, silhouette_dilate_px=0)
+    assert len(extract_blobs(skin, sil, no_dilation)) == 0
+
+
+def test_empty_input_gives_empty_blobset():
+    sil = silhouettes_from_mask(np.zeros((H, W), bool), 10)
+    blobs = extract_blobs(np.zeros((H, W), bool), sil, BlobConfig())
+    assert len(blobs) == 0
+    assert blobs.centroids_px.shape == (0, 2) and blobs.bboxes_px.shape == (0, 4)
+    assert blobs.labels.shape == (H, W) and blobs.labels.dtype == np.int32
+
+
+def test_wrong_skin_shape_names_argument():
+    with pytest.raises(ValueError, match="skin"):
+        extract_blobs(np.zeros((H, W + 1), bool), _one_person(), BlobConfig())
