@@ -14,33 +14,13 @@ import argparse
 import sys
 from pathlib import Path
 
-import cv2
 import numpy as np
 
-from surveil.io.calibration import load_rig
-from surveil.io.ground_truth import MaskClass, load_ground_truth
+from surveil.eval.truth_checks import visible_hands_on_skin
+from surveil.io.ground_truth import load_ground_truth
 from surveil.synth.scene import synthesise
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def hands_on_skin(rec: Path) -> tuple[int, int]:
-    gt = load_ground_truth(rec)
-    rig = load_rig(rec / "ground_truth" / "rig_true.yaml")
-    hits = total = 0
-    for c, cam in enumerate(gt.cameras):
-        for i, frame in enumerate(gt.frames):
-            path = rec / "ground_truth" / "masks" / cam / f"{frame:06d}.png"
-            if not path.exists():
-                continue
-            mask = cv2.imread(str(path))
-            px, _ = rig[cam].project(gt.positions_m[i])
-            for j, label in enumerate(gt.labels):
-                if label.endswith("hand") and gt.visible[i, j, c]:
-                    u, v = np.round(px[j]).astype(int)
-                    total += 1
-                    hits += int(mask[v, u, 0] == MaskClass.SKIN)
-    return hits, total
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -53,7 +33,7 @@ def main(argv: list[str] | None = None) -> int:
     for path in scenarios:
         summary = synthesise(path, args.out / path.stem, overwrite=True)
         gt = load_ground_truth(args.out / path.stem)
-        hits, total = hands_on_skin(args.out / path.stem)
+        hits, total = visible_hands_on_skin(args.out / path.stem)
         two_views = float((gt.n_views >= 2).mean())
         ms = 1000 * summary.render_s / summary.n_camera_frames
         rows.append(
