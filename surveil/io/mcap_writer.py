@@ -423,31 +423,24 @@ class McapWriter:
             points["person"] = np.clip([tg.person for tg in live], 0, 255)
             points["limb"] = [int(tg.limb) for tg in live]
             points["state"] = [tg.phase.code for tg in live]
-        self._write(
-            TOPIC_TARGET_POINTS,
-            PointCloud(
-                timestamp=stamp,
-                frame_id=WORLD_FRAME,
-                pose=_identity_pose(),
-                point_stride=TARGET_POINT_DTYPE.itemsize,
-                fields=self._target_fields,
-                data=points.tobytes(),
-            ),
-            t_ns,
-        )
+        self._write_cloud(TOPIC_TARGET_POINTS, stamp, self._target_fields, points, t_ns)
 
         cand = np.zeros(len(candidates.points_m), dtype=CANDIDATE_POINT_DTYPE)
         cand["x"], cand["y"], cand["z"] = candidates.points_m.T
         cand["prior"] = candidates.prior
+        self._write_cloud(TOPIC_CANDIDATES, stamp, self._candidate_fields, cand, t_ns)
+
+    def _write_cloud(self, topic: str, stamp, fields, points: np.ndarray, t_ns: int) -> None:
+        """One PointCloud in the world frame from a packed structured array."""
         self._write(
-            TOPIC_CANDIDATES,
+            topic,
             PointCloud(
                 timestamp=stamp,
                 frame_id=WORLD_FRAME,
                 pose=_identity_pose(),
-                point_stride=CANDIDATE_POINT_DTYPE.itemsize,
-                fields=self._candidate_fields,
-                data=cand.tobytes(),
+                point_stride=points.dtype.itemsize,
+                fields=fields,
+                data=points.tobytes(),
             ),
             t_ns,
         )

@@ -51,32 +51,12 @@ def contact_sheet(
                         continue
                     colour = LIMB_COLOURS[label.split("/")[1]]
                     centre = tuple(int(round(x)) for x in px[j] * scale)
-                    thickness = 1 if gt.visible[i, j, c] else -1
-                    if thickness > 0:
+                    if gt.visible[i, j, c]:
                         cv2.circle(tile, centre, 9, colour, 1, cv2.LINE_AA)
                     else:
                         cv2.circle(tile, centre, 2, colour, -1, cv2.LINE_AA)
             t_s = k / gt.fps
-            cv2.putText(
-                tile,
-                f"{name}  t={t_s:.2f}s",
-                (6, 16),
-                cv2.FONT_HERSHEY_SIMPLEX,
-                0.45,
-                (0, 0, 0),
-                3,
-                cv2.LINE_AA,
-            )
-            cv2.putText(
-                tile,
-                f"{name}  t={t_s:.2f}s",
-                (6, 16),
-                cv2.FONT_HERSHEY_SIMPLEX,
-                0.45,
-                (255, 255, 255),
-                1,
-                cv2.LINE_AA,
-            )
+            _outlined_text(tile, f"{name}  t={t_s:.2f}s", (6, 16))
             tiles.append(tile)
         rows.append(np.hstack(tiles))
     sheet = np.vstack(rows) if rows else np.zeros((tile_h, TILE_W * len(cams), 3), np.uint8)
@@ -93,3 +73,11 @@ def contact_sheet(
         cv2.LINE_AA,
     )
     return np.vstack([header, sheet])
+
+
+def _outlined_text(image: np.ndarray, text: str, origin: tuple[int, int]) -> None:
+    """White text with a dark outline, readable on any background."""
+    for colour, thickness in (((0, 0, 0), 3), ((255, 255, 255), 1)):
+        cv2.putText(
+            image, text, origin, cv2.FONT_HERSHEY_SIMPLEX, 0.45, colour, thickness, cv2.LINE_AA
+        )

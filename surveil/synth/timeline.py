@@ -15,7 +15,7 @@ comes to rest at the object (paper 004, Table 1 and section 7).
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -40,11 +40,8 @@ SIDE_SIGN = {"left": 1.0, "right": -1.0}
 NS = 1_000_000_000
 
 
-@dataclass
 class Track:
     """Piecewise minimum-jerk blends between target functions of time."""
-
-    moves: list[tuple[float, float, TargetFn]] = field(default_factory=list)
 
     def __init__(self, initial: TargetFn) -> None:
         self.moves = [(-np.inf, -np.inf, initial)]
