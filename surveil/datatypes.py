@@ -315,3 +315,98 @@ class CameraObservation:
     silhouettes: Silhouettes
     skin: np.ndarray  # (H, W) bool skin pixels (whole frame, before the silhouette mask)
     blobs: BlobSet
+
+
+@dataclass(frozen=True, slots=True)
+class Transition:
+    """One tracker's phase change (paper 004 Fig. 1), timestamped for the later stages.
+
+    The activity stage reads coincidence (``new is COMBINED``: the climax) and separation
+    (``old is COMBINED``) moments from these.
+
+    t_ns : int -- time of the frame set in which the change happened, ns
+    target_id : int -- the tracker that changed
+    old, new : Phase
+    label : str -- the tracker's label *before* the change (``p1/right_hand`` or ``t7``)
+    position_m : (3,) float64 -- its estimate at the change, world frame, metres
+    partner_id : int | None -- for joins and separations, the other tracker involved
+    partner_label : str | None -- that tracker's label before the change
+    """
+
+    t_ns: int
+    target_id: int
+    old: Phase
+    new: Phase
+    label: str
+    position_m: np.ndarray
+    partner_id: int | None = None
+    partner_label: str | None = None
+
+    def __post_init__(self) -> None:
+        pos = np.asarray(self.position_m, dtype=np.float64)
+        require_shape("position_m", pos, (3,), np.floating)
+        readonly(pos)
+        object.__setattr__(self, "position_m", pos)
+
+
+@dataclass(frozen=True, slots=True)
+class TrackFrame:
+    """Output of the tracking stage for one frame set.
+
+    t_ns : int
+    targets : every live tracker (not uninitialised), in tracker-id order
+    transitions : phase changes that happened in this step
+    particles_m : (N, 3) float32, optional -- all particles of all trackers (for review)
+    particle_owner : (N,) int32, optional -- the tracker id of each particle
+    """
+
+    t_ns: int
+    targets: tuple[TargetSnapshot, ...]
+    transitions: tuple[Transition, ...] = ()
+    particles_m: np.ndarray | None = None
+    particle_owner: np.ndarray | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class CarryEstimate:
+    """What one hand carries at one instant (paper 004 sections 7.2-7.3).
+
+    target_id : int -- the hand's tracker
+    label : str -- its label (``p1/right_hand``)
+    t_ns : int
+    carrying : bool
+    hue_deg : float | None -- hue of the strongest object mode, degrees [0, 360)
+    confidence : float -- 0..1
+    hue_pdf : (B,) float64 -- fused, normalised hue distribution of the hand's region
+        (B bins over [0, 360)), after skin (and optionally clothing) removal
+    """
+
+    target_id: int
+    label: str
+    t_ns: int
+    carrying: bool
+    hue_deg: float | None
+    confidence: float
+    hue_pdf: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+
+@dataclass(frozen=True, slots=True)
+class FrameResult:
+    """Everything the output sinks (MCAP, Rerun) need for one processed frame set.
+
+    frameset : the input images and times
+    observations : per camera that had a frame: silhouettes, skin, blobs
+    candidates : the 3D candidate points
+    track : tracker output (targets, transitions, optional particles)
+    carry : per hand tracker id, what it carries (only hands the carry stage analysed)
+    events : activities decided in this step (their climax may lie earlier)
+    timings_ms : stage name -> milliseconds spent on this frame set
+    """
+
+    frameset: FrameSet
+    observations: Mapping[str, CameraObservation]
+    candidates: CandidateSet
+    track: TrackFrame
+    carry: Mapping[int, CarryEstimate] = field(default_factory=dict)
+    events: tuple[ActivityEvent, ...] = ()
+    timings_ms: Mapping[str, float] = field(default_factory=dict)
