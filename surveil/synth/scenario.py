@@ -83,7 +83,16 @@ def parse_rgb(value: str | tuple, where: str, *, skin: bool = False) -> np.ndarr
 @dataclass(frozen=True, kw_only=True)
 class SceneSpec:
     name: str = setting("scene", "scenario name")
-    duration_s: float = setting(10.0, "length of the recording, seconds", min=0.5, max=3600)
+    duration_s: float = setting(
+        10.0, "length of the action, seconds (after the empty-room lead-in)", min=0.5, max=3600
+    )
+    empty_room_s: float = setting(
+        2.0,
+        "seconds of empty room recorded before the people appear (the background model's "
+        "learning phase); action times count from the end of it",
+        min=0.0,
+        max=600,
+    )
     fps: float = setting(15.0, "frame rate", min=1.0, max=120)
     seed: int = setting(0, "seed of every random choice", min=0)
     description: str = setting("", "free text")

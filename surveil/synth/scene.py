@@ -14,6 +14,8 @@ to date is reused instead of re-rendered.
 
 from __future__ import annotations
 
+import dataclasses
+
 import hashlib
 import logging
 import shutil
@@ -39,7 +41,7 @@ from surveil.synth.timeline import SIDES, Choreography, compile_scenario
 
 log = logging.getLogger(__name__)
 
-GENERATOR_VERSION = 1
+GENERATOR_VERSION = 2  # 2: empty-room lead-in
 NS = 1_000_000_000
 LIMBS = ("head", "left_hand", "right_hand")
 MIN_VISIBLE_FRACTION = 0.5
@@ -238,7 +240,8 @@ def _render(
     written_rig = perturb_rig(true_rig, scenario, rng_rig)
     chor = compile_scenario(scenario, rng_chor)
     fps = scenario.scene.fps
-    n_frames = int(round(scenario.scene.duration_s * fps))
+    lead_s = scenario.scene.empty_room_s
+    n_frames = int(round((lead_s + scenario.scene.duration_s) * fps))
     period_ns = NS / fps
     eff = scenario.effects
     for cam_name in eff.late_start_s:
@@ -283,17 +286,18 @@ def _render(
             {min(n_frames - 1, max(0, round(t * fps))) for t in preview_times_s}
         )
     else:
-        preview_frames = _preview_frames(chor, n_frames, fps) if preview else []
+        preview_frames = _preview_frames(chor, n_frames, fps, lead_s) if preview else []
     preview_images: dict[int, dict[str, np.ndarray]] = {}
     prev_root = {pid: chor.actors[pid].root(0.0) for pid in ids}
     gait = dict.fromkeys(ids, 0.0)
     min_px = max(6, int(12 * (true_rig.cameras[0].width / 640) ** 2))
     for k in range(n_frames):
-        t = k / fps
+        # t: choreography time, negative during the empty-room lead-in
+        t = k / fps - lead_s
         poses, prims = {}, []
         limb_prims: dict[str, list[int]] = {}
         casters = []
-        for pid in ids:
+        for pid in ids if t >= 0 else ():
             actor = chor.actors[pid]
             root = actor.root(t)
             step = float(np.linalg.norm(root - prev_root[pid]))
@@ -320,7 +324,9 @@ def _render(
             for h, w in ((0.0, 0.7), (0.6, 0.5), (1.2, 0.35)):
                 casters.append((root[0] + h * light_xy[0], root[1] + h * light_xy[1], w))
         for o, name in enumerate(obj_names):
-            prim, holder, centre = object_primitive(chor, name, t, poses)
+            if t < 0 and chor.objects[name].state(0.0)[0]:
+                continue  # held from the start: arrives with its holder
+            prim, holder, centre = object_primitive(chor, name, max(t, 0.0), poses)
             prims.append(prim)
             obj_pos[k, o] = centre
             held[k, o] = holder
@@ -342,7 +348,7 @@ def _render(
             inside = r.cam.in_image(px, depth)
             centre_px, centre_ok = r.canvas_pixel(positions[k])
             centre_winner = np.where(centre_ok, winner[centre_px[:, 1], centre_px[:, 0]], -1)
-            for j, label in enumerate(labels):
+            for j, label in enumerate(labels if t >= 0 else ()):
                 idx = limb_prims[label]
                 full = max(int(full_area[i]) for i in idx)
                 if full < min_px or not inside[j] or centre_winner[j] not in idx:
@@ -376,6 +382,7 @@ def _render(
         "n_camera_frames": n_camera_frames,
         "missing_frames": missing,
         "mask_every": eff.mask_every,
+        "empty_room_s": lead_s,
         "min_visible_fraction": MIN_VISIBLE_FRACTION,
         "persons": [
             {
@@ -393,6 +400,16 @@ def _render(
         ],
         "render_ms_per_camera_frame": round(1000 * render_s / max(n_camera_frames, 1), 2),
     }
+    lead_ns = round(lead_s * NS)
+    events = tuple(
+        dataclasses.replace(
+            ev,
+            start_ns=ev.start_ns + lead_ns,
+            climax_ns=ev.climax_ns + lead_ns,
+            end_ns=ev.end_ns + lead_ns,
+        )
+        for ev in chor.events
+    )
     gt = GroundTruth(
         frames=np.arange(n_frames),
         t_ns=np.round(times * NS).astype(np.int64),
@@ -404,7 +421,7 @@ def _render(
         object_hue_deg=np.array([chor.objects[n].hue_deg for n in obj_names]),
         object_positions_m=obj_pos,
         held_by=held,
-        events=tuple(chor.events),
+        events=events,
         meta=meta,
     )
     write_ground_truth(out / GT_DIR, gt)
@@ -426,7 +443,7 @@ def _render(
         cams,
         n_camera_frames,
         missing,
-        tuple(chor.events),
+        events,
         render_s=render_s,
     )
 
@@ -442,14 +459,16 @@ def _label_image(prims: list[Ellipsoid], winner: np.ndarray, r: CameraRenderer) 
     return r.distort_labels(canvas)
 
 
-def _preview_frames(chor: Choreography, n_frames: int, fps: float) -> list[int]:
-    """Up to four frames: event climaxes first, else evenly spaced."""
-    picks = [min(n_frames - 1, int(round(e.climax_ns / NS * fps))) for e in chor.events]
+def _preview_frames(chor: Choreography, n_frames: int, fps: float, lead_s: float) -> list[int]:
+    """Up to four frames: event climaxes first, else evenly spaced after the lead-in."""
+    picks = [
+        min(n_frames - 1, int(round((e.climax_ns / NS + lead_s) * fps))) for e in chor.events
+    ]
     picks = sorted(set(picks))
     if len(picks) > 4:
         picks = [picks[i] for i in np.linspace(0, len(picks) - 1, 4).round().astype(int)]
     while len(picks) < 4:
-        extra = [int(x) for x in np.linspace(0, n_frames - 1, 6)[1:-1]]
+        extra = [int(x) for x in np.linspace(lead_s * fps, n_frames - 1, 6)[1:-1]]
         for e in extra:
             if len(picks) < 4 and all(abs(e - p) > 2 for p in picks):
                 picks.append(e)
