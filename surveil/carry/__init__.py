@@ -1,0 +1,45 @@
+"""Carried-object detection: hue modes around tracked hands (paper 004 sections 7.2-7.3)."""
+
+from surveil.carry.analysis import (
+    CarryAnalyser,
+    HandView,
+    analyse_hand_view,
+    choose_radius,
+    find_hand_blob,
+    hand_region,
+    is_analysed_hand,
+    reliability,
+    rim_background_fraction,
+)
+from surveil.carry.fusion import HueWindow, decide_carrying, fuse_distributions
+from surveil.carry.hue import (
+    connected_modes,
+    find_modes,
+    hue_histogram,
+    pixel_hues,
+    region_mode_pdf,
+    smooth_circular,
+)
+from surveil.carry.settings import CarryConfig
+
+__all__ = [
+    "CarryAnalyser",
+    "CarryConfig",
+    "HandView",
+    "HueWindow",
+    "analyse_hand_view",
+    "choose_radius",
+    "connected_modes",
+    "decide_carrying",
+    "find_hand_blob",
+    "find_modes",
+    "fuse_distributions",
+    "hand_region",
+    "hue_histogram",
+    "is_analysed_hand",
+    "pixel_hues",
+    "region_mode_pdf",
+    "reliability",
+    "rim_background_fraction",
+    "smooth_circular",
+]

@@ -1,0 +1,528 @@
+"""Carried-object analysis of tracked hands (paper 004 sections 7.2-7.3).
+
+Per hand and camera (pure functions): project the 3D hand, find its skin blob, select a
+circular region around it whose radius adapts to the reliability of eq. 28, filter it (inside
+the silhouette, connected to the hand, not skin) and reduce it to the hue distribution of its
+connected modes. :class:`CarryAnalyser` (stateful) fuses these over cameras and a time window
+(eq. 29), freezes a hand's window while it overlaps another hand, optionally subtracts the
+person's other hand (dress colour), and decides per hand whether it carries an object.
+
+Choices where the paper leaves freedom (docs/carry.md):
+
+- *Radius adaptation.* Radii grow from the smallest circle that covers the hand blob (and at
+  least ``min_radius_m``) to ``max_radius_m`` in ``n_radius_steps``; the first radius whose rim
+  is at least ``grow_stop_bg`` background is used (the circle has left the body: a stretched
+  hand). If no rim reaches ``inside_bg`` background the hand is inside the silhouette and the
+  smallest circle is used (to exclude as much dress as possible); otherwise the radius with
+  the most background on its rim.
+- *Blob.* The blob under the projected hand, else the nearest blob pixel within
+  ``blob_search_m`` (projected); no blob means the hand is not visible in that camera.
+  The circle is centred on the blob's pixels near the projection (a forearm with short
+  sleeves does not drag it away).
+- *Overlap.* Two hands closer than ``overlap_distance_m`` in 3D freeze their windows: no
+  samples are added and the estimate from before the overlap is returned, until they are
+  ``separation_margin_m`` farther apart; then the window restarts empty (it "begins after the
+  instant the circular regions intersect"). In a single camera, a hand whose largest circle
+  would overlap another hand's contributes nothing from that camera for that frame.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from surveil.camera import Camera, Rig
+from surveil.carry.fusion import HueWindow, decide_carrying, subtract_distribution
+from surveil.carry.hue import pixel_hues, region_mode_pdf
+from surveil.carry.settings import CarryConfig
+from surveil.datatypes import CameraObservation, CarryEstimate, Limb, Phase, TargetSnapshot
+from surveil.validate import require_shape
+
+log = logging.getLogger(__name__)
+
+
+# ---------------------------------------------------------------------------------------------
+# pure per-view functions
+
+
+def rim_background_fraction(
+    foreground: np.ndarray, centre_px: np.ndarray, radii_px: np.ndarray, n_samples: int
+) -> np.ndarray:
+    """Share of background pixels on circles around a point (the vector v_c of eq. 28).
+
+    Parameters
+    ----------
+    foreground : (H, W) bool
+        Silhouette mask (True = person).
+    centre_px : (2,) float
+        Circle centre ``(u, v)``.
+    radii_px : (R,) float
+        Circle radii.
+    n_samples : int
+        Points sampled evenly on each circle; points outside the image are not counted.
+
+    Returns
+    -------
+    (R,) float64
+        Fraction of the in-image rim points that are background, per radius (0 when a circle
+        lies entirely outside the image).
+
+    >>> fg = np.zeros((50, 50), bool); fg[:, :25] = True   # the left half is a person
+    >>> bg = rim_background_fraction(fg, np.array([25.0, 25.0]), np.array([10.0]), 64)
+    >>> bg.round(1).tolist()  # the rim is half in the person
+    [0.5]
+    """
+    require_shape("foreground", foreground, (None, None), np.bool_)
+    h, w = foreground.shape
+    radii = np.asarray(radii_px, np.float64).reshape(-1)
+    angles = np.linspace(0.0, 2.0 * np.pi, n_samples, endpoint=False)
+    u = np.rint(centre_px[0] + radii[:, None] * np.cos(angles)).astype(np.int64)
+    v = np.rint(centre_px[1] + radii[:, None] * np.sin(angles)).astype(np.int64)
+    inside = (u >= 0) & (u < w) & (v >= 0) & (v < h)
+    bg = np.zeros(u.shape, bool)
+    bg[inside] = ~foreground[v[inside], u[inside]]
+    n_in = inside.sum(axis=1)
+    return np.where(n_in > 0, bg.sum(axis=1) / np.maximum(n_in, 1), 0.0)
+
+
+def reliability(background_fraction: np.ndarray | float, rho_min: float) -> np.ndarray:
+    """Eq. 28: rho = (n - sum v_c) / n + rho_min, with ``background_fraction`` the first term.
+
+    (The paper's text calls background 1 and foreground 0 but writes the fraction of
+    foreground; its examples -- a stretched hand is reliable -- need the background share.)
+
+    >>> float(reliability(0.75, 0.1))
+    0.85
+    """
+    # eq. 28
+    return np.asarray(background_fraction, np.float64) + rho_min
+
+
+def choose_radius(background_fractions: np.ndarray, grow_stop_bg: float, inside_bg: float) -> int:
+    """Index of the radius to use among growing radii (section 7.3, radius adaptation).
+
+    The first radius whose rim has at least ``grow_stop_bg`` background; if none reaches
+    ``inside_bg`` the smallest (the hand is inside the silhouette); else the one with the most.
+
+    >>> choose_radius(np.array([0.1, 0.3, 0.6, 0.9]), 0.5, 0.2)
+    2
+    >>> choose_radius(np.array([0.0, 0.1, 0.15]), 0.5, 0.2)
+    0
+    >>> choose_radius(np.array([0.1, 0.4, 0.3]), 0.5, 0.2)
+    1
+    """
+    bg = np.asarray(background_fractions, np.float64)
+    if len(bg) == 0:
+        raise ValueError("background_fractions must hold at least one radius, got none")
+    hits = np.flatnonzero(bg >= grow_stop_bg)
+    if len(hits):
+        return int(hits[0])
+    if bg.max() < inside_bg:
+        return 0
+    return int(np.argmax(bg))
+
+
+def find_hand_blob(blob_labels: np.ndarray, point_px: np.ndarray, search_px: float) -> int:
+    """Label of the skin blob under a point, else of the nearest blob pixel within reach.
+
+    Parameters
+    ----------
+    blob_labels : (H, W) int
+        ``BlobSet.labels`` (0 none, i + 1 for blob i), or a crop of it.
+    point_px : (2,) float
+        ``(u, v)`` in the same pixel frame.
+    search_px : float
+        Largest distance to a blob pixel.
+
+    Returns
+    -------
+    int
+        The blob label (>= 1), or 0 when no blob pixel lies within ``search_px``.
+
+    >>> lab = np.zeros((20, 20), np.int32); lab[5:8, 5:8] = 1; lab[5:8, 14:17] = 2
+    >>> find_hand_blob(lab, np.array([6.0, 6.0]), 3), find_hand_blob(lab, np.array([12.0, 6.0]), 3)
+    (1, 2)
+    >>> find_hand_blob(lab, np.array([10.0, 15.0]), 3)
+    0
+    """
+    h, w = blob_labels.shape
+    u, v = float(point_px[0]), float(point_px[1])
+    r = int(np.ceil(search_px))
+    x0, x1 = max(int(round(u)) - r, 0), min(int(round(u)) + r + 1, w)
+    y0, y1 = max(int(round(v)) - r, 0), min(int(round(v)) + r + 1, h)
+    if x0 >= x1 or y0 >= y1:
+        return 0
+    win = blob_labels[y0:y1, x0:x1]
+    rows, cols = np.nonzero(win)
+    if len(rows) == 0:
+        return 0
+    d2 = (cols + x0 - u) ** 2 + (rows + y0 - v) ** 2
+    best = int(np.argmin(d2))
+    if d2[best] > search_px**2 + 0.5:  # +0.5: the pixel under the point is always in reach
+        return 0
+    return int(win[rows[best], cols[best]])
+
+
+def hand_region(
+    foreground: np.ndarray,
+    skin: np.ndarray,
+    blob: np.ndarray,
+    centre_px: np.ndarray,
+    radius_px: float,
+) -> np.ndarray:
+    """The pixels to colour-analyse around a hand (section 7.2.1).
+
+    Inside the circle, keep the foreground (silhouette or blob) component(s) connected to the
+    hand blob (8-connectivity), then remove skin and the blob itself.
+
+    Parameters
+    ----------
+    foreground : (H, W) bool
+        Silhouette mask.
+    skin : (H, W) bool
+        Skin mask.
+    blob : (H, W) bool
+        The hand's skin blob.
+    centre_px : (2,) float
+        Circle centre ``(u, v)``.
+    radius_px : float
+
+    Returns
+    -------
+    (H, W) bool
+
+    >>> fg = np.zeros((20, 20), bool); fg[8:12, 2:14] = True; fg[2:4, 2:4] = True
+    >>> blob = np.zeros_like(fg); blob[8:12, 2:6] = True
+    >>> reg = hand_region(fg, blob, blob, np.array([4.0, 10.0]), 9.0)
+    >>> int(reg.sum()), bool(reg[2, 2]), bool(reg[10, 8])  # the far patch is not connected
+    (29, False, True)
+    """
+    require_shape("foreground", foreground, (None, None), np.bool_)
+    require_shape("skin", skin, foreground.shape, np.bool_)
+    require_shape("blob", blob, foreground.shape, np.bool_)
+    h, w = foreground.shape
+    yy, xx = np.ogrid[:h, :w]
+    disk = (xx - centre_px[0]) ** 2 + (yy - centre_px[1]) ** 2 <= radius_px**2
+    cand = disk & (foreground | blob)
+    _, labels = cv2.connectedComponents(cand.view(np.uint8), connectivity=8)
+    hand_labels = np.unique(labels[blob & disk])
+    hand_labels = hand_labels[hand_labels > 0]
+    if len(hand_labels) == 0:
+        return np.zeros_like(foreground)
+    connected = np.isin(labels, hand_labels)
+    return connected & ~skin & ~blob
+
+
+@dataclass(frozen=True, slots=True)
+class HandView:
+    """One hand analysed in one camera.
+
+    camera : str
+    centre_px : (2,) float64 -- circle centre (u, v), full-image pixels
+    radius_px : float -- the radius chosen by the adaptation
+    rho : float -- reliability of eq. 28
+    pdf : (B,) float64 -- hue distribution of the region's connected modes (mass <= 1)
+    modes_deg : (K,) float64 -- hues of the kept modes, strongest first
+    n_region_px : int -- pixels in the filtered region
+    """
+
+    camera: str
+    centre_px: np.ndarray
+    radius_px: float
+    rho: float
+    pdf: np.ndarray
+    modes_deg: np.ndarray
+    n_region_px: int
+
+
+def projected_radius_px(
+    camera: Camera, radius_m: float, depth_m: float, cfg: CarryConfig
+) -> float:
+    """A metric radius at ``depth_m`` in pixels, clipped to the configured pixel range.
+
+    >>> from surveil.camera import look_at
+    >>> cam = look_at("c", np.array([0.0, -4, 1]), np.zeros(3), width=640, height=480,
+    ...               hfov_deg=60)
+    >>> round(projected_radius_px(cam, 0.1, 4.0, CarryConfig()), 1)
+    13.9
+    """
+    r = camera.K[0, 0] * radius_m / max(depth_m, 1e-9)
+    return float(np.clip(r, cfg.min_radius_px, cfg.max_radius_px))
+
+
+def analyse_hand_view(
+    bgr: np.ndarray,
+    observation: CameraObservation,
+    camera: Camera,
+    hand_m: np.ndarray,
+    cfg: CarryConfig,
+) -> HandView | None:
+    """Hue distribution and reliability of one hand in one camera (sections 7.2-7.3).
+
+    Only a region of interest around the projected hand is processed.
+
+    Parameters
+    ----------
+    bgr : (H, W, 3) uint8
+        The camera image.
+    observation : CameraObservation
+        Its silhouettes, skin mask and blobs.
+    camera : Camera
+    hand_m : (3,) float
+        The hand, world frame, metres.
+    cfg : CarryConfig
+
+    Returns
+    -------
+    HandView or None
+        None when the hand projects outside the image or no skin blob lies near it.
+    """
+    px, depth = camera.project(np.asarray(hand_m, np.float64).reshape(1, 3))
+    if not camera.in_image(px, depth)[0]:
+        return None
+    z = float(depth[0])
+    uv = px[0]
+    r_lo = projected_radius_px(camera, cfg.min_radius_m, z, cfg)
+    r_hi = projected_radius_px(camera, cfg.max_radius_m, z, cfg)
+    search = max(camera.K[0, 0] * cfg.blob_search_m / z, 1.5)
+    h, w = bgr.shape[:2]
+    half = int(np.ceil(r_hi + search)) + 1
+    uc, vc = int(round(uv[0])), int(round(uv[1]))
+    x0, x1 = max(uc - half, 0), min(uc + half + 1, w)
+    y0, y1 = max(vc - half, 0), min(vc + half + 1, h)
+    origin = np.array([x0, y0], np.float64)
+    blob_labels = observation.blobs.labels[y0:y1, x0:x1]
+    label = find_hand_blob(blob_labels, uv - origin, search)
+    if label == 0:
+        return None
+    blob = blob_labels == label
+    rows, cols = np.nonzero(blob)
+    pts = np.column_stack([cols, rows]).astype(np.float64)
+    near = np.sum((pts - (uv - origin)) ** 2, axis=1) <= r_hi**2
+    if near.any():
+        pts = pts[near]
+    centre = pts.mean(axis=0)
+    r_blob = float(np.sqrt(np.max(np.sum((pts - centre) ** 2, axis=1)))) + 0.5
+    r_small = min(max(r_lo, r_blob), r_hi)
+    radii = np.linspace(r_small, r_hi, cfg.n_radius_steps)
+    foreground = observation.silhouettes.labels[y0:y1, x0:x1] > 0
+    bg = rim_background_fraction(foreground, centre, radii, cfg.n_rim_samples)
+    k = choose_radius(bg, cfg.grow_stop_bg, cfg.inside_bg)
+    skin = observation.skin[y0:y1, x0:x1]
+    region = hand_region(foreground, skin, blob, centre, float(radii[k]))
+    hues = pixel_hues(bgr[y0:y1, x0:x1], cfg.min_saturation, cfg.min_value)
+    pdf, modes = region_mode_pdf(
+        hues,
+        region,
+        n_bins=cfg.hue_bins,
+        sigma_deg=cfg.kde_sigma_deg,
+        min_peak=cfg.mode_min_peak,
+        halfwidth_deg=cfg.mode_halfwidth_deg,
+        min_pixels=cfg.mode_min_pixels,
+    )
+    return HandView(
+        camera=camera.name,
+        centre_px=centre + origin,
+        radius_px=float(radii[k]),
+        rho=float(reliability(bg[k], cfg.rho_min)),
+        pdf=pdf,
+        modes_deg=modes,
+        n_region_px=int(np.count_nonzero(region)),
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# the stateful analyser
+
+
+def is_analysed_hand(target: TargetSnapshot, cfg: CarryConfig) -> bool:
+    """Whether :class:`CarryAnalyser` treats a target as a hand.
+
+    Labelled hands (``LEFT_HAND``/``RIGHT_HAND``) are; so are unlabelled (``UNKNOWN``) targets
+    lower than ``cfg.unknown_max_height_m`` (a standing adult's head is higher: after a
+    coincidence the trackers are unlabelled for a while, and their carried objects matter
+    then). Heads and lost targets are not.
+
+    >>> t = TargetSnapshot(1, 0, Limb.UNKNOWN, Phase.UNLABELLED, np.array([0.0, 0, 1.1]))
+    >>> is_analysed_hand(t, CarryConfig())
+    True
+    """
+    if target.phase is Phase.LOST or not np.all(np.isfinite(target.mean_m)):
+        return False
+    if target.limb.is_hand:
+        return True
+    return target.limb is Limb.UNKNOWN and float(target.mean_m[2]) < cfg.unknown_max_height_m
+
+
+@dataclass(slots=True)
+class _HandState:
+    window: HueWindow
+    frozen: bool = False
+    last: CarryEstimate | None = None
+
+
+class CarryAnalyser:
+    """Per-hand carried-object estimates over time (paper 004 sections 7.2-7.3, eq. 28-29).
+
+    Parameters
+    ----------
+    cfg : CarryConfig
+    rig : Rig
+        Cameras by name; observations of cameras not in the rig are ignored.
+
+    Notes
+    -----
+    State per hand target: a :class:`~surveil.carry.fusion.HueWindow` ring buffer of
+    ``cfg.max_window_samples`` samples, a frozen flag and the last estimate; targets that
+    disappear from the input are forgotten, so memory does not grow with time.
+    """
+
+    def __init__(self, cfg: CarryConfig, rig: Rig) -> None:
+        self.cfg = cfg
+        self.rig = rig
+        self._cams = rig.as_mapping()
+        self._window_ns = int(round(cfg.window_s * 1e9))
+        self._hands: dict[int, _HandState] = {}
+
+    def reset(self) -> None:
+        """Forget every hand."""
+        self._hands.clear()
+
+    def step(
+        self,
+        t_ns: int,
+        images: Mapping[str, np.ndarray],
+        observations: Mapping[str, CameraObservation],
+        targets: Sequence[TargetSnapshot],
+    ) -> dict[int, CarryEstimate]:
+        """Analyse one frame set.
+
+        Parameters
+        ----------
+        t_ns : int
+            Time of the frame set, ns on the recording clock.
+        images : Mapping[str, (H, W, 3) uint8 BGR]
+            Frames by camera name (absent camera = missing frame).
+        observations : Mapping[str, CameraObservation]
+            The per-camera stage's output for the same frames.
+        targets : Sequence[TargetSnapshot]
+            All live trackers; the hands among them (:func:`is_analysed_hand`) are analysed.
+
+        Returns
+        -------
+        dict[int, CarryEstimate]
+            One estimate per analysed hand, by tracker id.
+        """
+        cfg = self.cfg
+        hands = [t for t in targets if is_analysed_hand(t, cfg)]
+        ids = [t.target_id for t in hands]
+        for gone in set(self._hands) - set(ids):
+            del self._hands[gone]
+        for tid in ids:
+            if tid not in self._hands:
+                self._hands[tid] = _HandState(HueWindow(cfg.max_window_samples, cfg.hue_bins))
+        if not hands:
+            return {}
+        pos = np.stack([t.mean_m for t in hands])
+        self._update_overlaps(pos, ids)
+        active = np.array([not self._hands[i].frozen for i in ids])
+        for cam_name, img in images.items():
+            obs = observations.get(cam_name)
+            cam = self._cams.get(cam_name)
+            if obs is None or cam is None:
+                continue
+            for j in np.flatnonzero(active & self._clear_in_view(cam, pos)):
+                view = analyse_hand_view(img, obs, cam, pos[j], cfg)
+                if view is not None:
+                    self._hands[ids[j]].window.push(t_ns, view.rho, view.pdf)
+        fused = {tid: self._hands[tid].window.fused(t_ns, self._window_ns) for tid in ids}
+        siblings = _siblings(hands) if cfg.subtract_clothing else {}
+        out: dict[int, CarryEstimate] = {}
+        for t in hands:
+            state = self._hands[t.target_id]
+            if state.frozen and state.last is not None:
+                out[t.target_id] = dataclasses.replace(state.last, t_ns=t_ns, label=t.label)
+                continue
+            pdf, total_rho = fused[t.target_id]
+            sib = siblings.get(t.target_id)
+            if sib is not None and fused[sib][1] > 0:
+                pdf = subtract_distribution(pdf, fused[sib][0])
+            est = self._estimate(t, t_ns, pdf, total_rho)
+            if not state.frozen:
+                state.last = est
+            out[t.target_id] = est
+        return out
+
+    def _update_overlaps(self, pos: np.ndarray, ids: list[int]) -> None:
+        """Freeze hands that come within ``overlap_distance_m`` of another hand; unfreeze (and
+        restart the window of) those farther than that plus ``separation_margin_m``."""
+        cfg = self.cfg
+        d = np.linalg.norm(pos[:, None, :] - pos[None, :, :], axis=2)
+        np.fill_diagonal(d, np.inf)
+        nearest = d.min(axis=1)
+        for tid, dist in zip(ids, nearest.tolist(), strict=True):
+            state = self._hands[tid]
+            if not state.frozen and dist < cfg.overlap_distance_m:
+                state.frozen = True
+                log.debug("carry: hand %d overlaps another hand; window frozen", tid)
+            elif state.frozen and dist > cfg.overlap_distance_m + cfg.separation_margin_m:
+                state.frozen = False
+                state.window.clear()
+                log.debug("carry: hand %d separated; window restarted", tid)
+
+    def _clear_in_view(self, cam: Camera, pos: np.ndarray) -> np.ndarray:
+        """(H,) bool: the hand projects into the image and its largest circle overlaps no
+        other hand's largest circle there."""
+        px, depth = cam.project(pos)
+        seen = cam.in_image(px, depth)
+        f = cam.K[0, 0]
+        r = np.clip(
+            f * self.cfg.max_radius_m / np.maximum(depth, 1e-9),
+            self.cfg.min_radius_px,
+            self.cfg.max_radius_px,
+        )
+        gap = np.linalg.norm(px[:, None, :] - px[None, :, :], axis=2)
+        touch = (gap < r[:, None] + r[None, :]) & seen[:, None] & seen[None, :]
+        np.fill_diagonal(touch, False)
+        return seen & ~touch.any(axis=1)
+
+    def _estimate(
+        self, target: TargetSnapshot, t_ns: int, pdf: np.ndarray, total_rho: float
+    ) -> CarryEstimate:
+        cfg = self.cfg
+        decision = decide_carrying(
+            pdf,
+            total_rho,
+            carry_mass=cfg.carry_mass,
+            halfwidth_deg=cfg.mode_mass_halfwidth_deg,
+            evidence_rho=cfg.evidence_rho,
+        )
+        mass = pdf.sum()
+        hue_pdf = pdf / mass if mass > 0 else np.zeros(cfg.hue_bins)
+        return CarryEstimate(
+            target_id=target.target_id,
+            label=target.label,
+            t_ns=t_ns,
+            carrying=decision.carrying,
+            hue_deg=decision.hue_deg if decision.carrying else None,
+            confidence=float(np.clip(decision.confidence, 0.0, 1.0)),
+            hue_pdf=hue_pdf,
+        )
+
+
+def _siblings(hands: Sequence[TargetSnapshot]) -> dict[int, int]:
+    """Tracker id -> the tracker of the same person's other hand (labelled hands only)."""
+    by_person: dict[tuple[int, Limb], int] = {
+        (t.person, t.limb): t.target_id for t in hands if t.person > 0 and t.limb.is_hand
+    }
+    out = {}
+    for (person, limb), tid in by_person.items():
+        other = Limb.RIGHT_HAND if limb is Limb.LEFT_HAND else Limb.LEFT_HAND
+        if (person, other) in by_person:
+            out[tid] = by_person[(person, other)]
+    return out
