@@ -1,0 +1,613 @@
+"""The activity engine: decision points over a stream of tracker frames (paper 004 §7, Table 1).
+
+Two kinds of episode, one per (rule, limbs) pair:
+
+*Coincidence episodes* (hand/hand, hand/head rules). Opened at the **climax**: the two
+trackers enter the combined state together (a ``Transition`` with ``new is COMBINED``), or their
+estimates come closer than the rule's ``coincidence_m`` (so hand/head contacts count even when
+the tracker keeps them apart). The limbs' labels from before the join and the carry estimates
+at the climax ("before"; the carry stage freezes estimates while hands overlap) are kept. The
+episode is separated by the combined -> unlabelled transition (or, if it never combined, when
+the distance exceeds ``coincidence_m`` again). The **post-separation point** is
+``separation_delay_s`` after the two targets are ``separation_m`` apart, or
+``separation_timeout_s`` after the separation, whichever comes first; the carry estimates there
+are "after". After the separation the trackers are unlabelled; a tracker that has been relabelled
+by then is matched to the pre-join labels by label, otherwise by tracker id.
+
+*Still episodes* (hand/scene rules: pick, place). A labelled hand in the normal state that
+stays within ``still_speed_mps * still_s`` for ``still_s`` (:func:`~.predicates.still_since`),
+below its shoulder and at least ``min_reach_m`` from its head horizontally
+(:func:`~.predicates.away_from_body`; heads are taken from the same person's ``pN/head``
+target), with no other target within ``coincidence_m``, after a reach (it was ``separation_m``
+or more from the still point at most ``max_approach_s`` before): the ballistic reach-stop of
+§7.3.1. Climax = the moment the hand stopped; "before" = the carry estimate at the start of the
+reach; "after" = the estimate ``separation_delay_s`` after the hand is ``separation_m`` from the
+still point again (the return), or at ``separation_timeout_s`` after the stop was detected.
+
+At the post-separation point every enabled rule whose limbs, persons, carry states and transfer
+match fires an :class:`~surveil.datatypes.ActivityEvent`, emitted by that :meth:`step`:
+``start_ns`` = the approach start (the last time the limbs were ``separation_m`` apart before
+the climax, at most ``max_approach_s`` earlier), ``end_ns`` = the post-separation point.
+``confidence`` is the mean confidence of the carry estimates the rule looked at (1 if it looked
+at none), times ``timeout_confidence_factor`` when the decision was forced by a timeout or by
+:meth:`finish`.
+
+The engine uses only ``t_ns``, never frame counts; it keeps a history of recent frames no
+longer than any rule needs (``max_approach_s + still_s`` plus a margin) and drops episodes when
+they are decided or given up.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections import deque
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from surveil.activity.predicates import (
+    away_from_body,
+    carry_satisfies,
+    carry_state,
+    object_moved,
+    still_since,
+)
+from surveil.activity.rules import Rule, RuleSet, label_matches
+from surveil.datatypes import (
+    ActivityEvent,
+    CarryEstimate,
+    Limb,
+    Phase,
+    TargetSnapshot,
+    TrackFrame,
+    parse_label,
+)
+
+log = logging.getLogger(__name__)
+
+_NS = 1_000_000_000
+_HISTORY_MARGIN_S = 0.5  # extra history beyond what the rules look back (rounding, jitter)
+
+
+def _ns(seconds: float) -> int:
+    return int(round(seconds * _NS))
+
+
+@dataclass(frozen=True, slots=True)
+class _Frame:
+    t_ns: int
+    targets: dict[int, TargetSnapshot]
+    carry: dict[int, CarryEstimate]
+
+
+@dataclass(slots=True)
+class _PairEpisode:
+    rule: Rule
+    ids: list[int]  # tracker ids, in the order of labels
+    labels: tuple[str, str]  # labels before the join
+    climax_ns: int
+    start_ns: int
+    before: tuple[CarryEstimate | None, CarryEstimate | None]
+    combined: bool
+    separated_ns: int | None = None
+    apart_ns: int | None = None
+
+
+@dataclass(slots=True)
+class _StillEpisode:
+    rule: Rule
+    hand_id: int
+    label: str
+    climax_ns: int
+    start_ns: int
+    detected_ns: int
+    point_m: np.ndarray
+    before: CarryEstimate | None
+    apart_ns: int | None = None
+
+
+def _person(label: str) -> int:
+    return parse_label(label)[0]
+
+
+def _persons(labels: tuple[str, ...]) -> tuple[str, ...]:
+    out: list[str] = []
+    for lab in labels:
+        p = _person(lab)
+        if p > 0 and f"p{p}" not in out:
+            out.append(f"p{p}")
+    return tuple(out)
+
+
+def _persons_ok(rule: Rule, labels: tuple[str, str]) -> bool:
+    if rule.persons == "any":
+        return True
+    pa, pb = _person(labels[0]), _person(labels[1])
+    if pa == 0 or pb == 0:
+        return False
+    return (pa == pb) if rule.persons == "same" else (pa != pb)
+
+
+def _orders(rule: Rule, labels: tuple[str, str]) -> list[tuple[int, int]]:
+    """Assignments (a, b) of the episode's two limbs to the rule's limbs (A, B) that fit the
+    limb kinds, the lexicographically smaller label first as A (deterministic actors)."""
+    orders = sorted([(0, 1), (1, 0)], key=lambda ab: (labels[ab[0]], labels[ab[1]]))
+    return [
+        (a, b)
+        for a, b in orders
+        if label_matches(rule.limbs[0], labels[a]) and label_matches(rule.limbs[1], labels[b])
+    ]
+
+
+def _distance(a: TargetSnapshot | None, b: TargetSnapshot | None) -> float | None:
+    if a is None or b is None:
+        return None
+    return float(np.linalg.norm(a.mean_m - b.mean_m))
+
+
+class ActivityEngine:
+    """Recognises activities online from tracker frames and carry estimates.
+
+    Parameters
+    ----------
+    rules : RuleSet
+        The rules to apply (disabled rules are ignored).
+
+    Examples
+    --------
+    >>> from surveil.activity.rules import load_rules
+    >>> engine = ActivityEngine(load_rules())
+    >>> engine.step(TrackFrame(0, ()), {})
+    []
+
+    References
+    ----------
+    Paper 004 §7.1 (coincidence and separation from the tracker FSM), §7.3.1 (decision points,
+    ballistic pick/place), Table 1.
+    """
+
+    def __init__(self, rules: RuleSet) -> None:
+        self.rules = rules
+        active = [r for r in rules if r.enabled]
+        self._pair_rules = [r for r in active if not r.is_scene]
+        self._scene_rules = [r for r in active if r.is_scene]
+        look_back = max(
+            (r.thresholds.max_approach_s + r.thresholds.still_s for r in active), default=0.0
+        )
+        self._history_ns = _ns(look_back + _HISTORY_MARGIN_S)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget every frame and episode (start of a new stream)."""
+        self._frames: deque[_Frame] = deque()
+        self._pairs: dict[tuple[str, frozenset[int]], _PairEpisode] = {}
+        self._stills: dict[tuple[str, int], _StillEpisode] = {}
+        # (rule, pair) -> disarmed until the pair is separation_m apart again
+        self._pair_disarmed: set[tuple[str, frozenset[int]]] = set()
+        # (rule, hand) -> last still point; re-armed when the hand is separation_m from it
+        self._still_disarmed: dict[tuple[str, int], np.ndarray] = {}
+        self._last_t_ns: int | None = None
+
+    # -----------------------------------------------------------------------------------------
+    # public API
+
+    def step(self, frame: TrackFrame, carry: Mapping[int, CarryEstimate]) -> list[ActivityEvent]:
+        """Feed one frame set; return the events decided at it (climaxes may lie earlier).
+
+        Parameters
+        ----------
+        frame : TrackFrame
+            Targets and transitions of this frame set.
+        carry : Mapping[int, CarryEstimate]
+            Per hand tracker id, what it carries now (hands not analysed may be absent).
+
+        Returns
+        -------
+        list of ActivityEvent
+            In climax order (then rule order).
+
+        Raises
+        ------
+        ValueError
+            If ``frame.t_ns`` is earlier than the previous frame's.
+        """
+        t = int(frame.t_ns)
+        if self._last_t_ns is not None and t < self._last_t_ns:
+            raise ValueError(
+                f"frame.t_ns must not decrease: got {t} after {self._last_t_ns}; "
+                "call reset() to start a new stream"
+            )
+        self._last_t_ns = t
+        prev = self._frames[-1] if self._frames else None
+        cur = _Frame(
+            t,
+            {s.target_id: s for s in frame.targets},
+            {int(k): v for k, v in carry.items()},
+        )
+        self._frames.append(cur)
+        while self._frames and self._frames[0].t_ns < t - self._history_ns:
+            self._frames.popleft()
+
+        events: list[ActivityEvent] = []
+        self._on_transitions(frame, cur, prev)
+        self._open_by_proximity(cur)
+        events += self._advance_pairs(cur)
+        self._open_stills(cur)
+        events += self._advance_stills(cur)
+        self._rearm(cur)
+        return self._ordered(events)
+
+    def finish(self) -> list[ActivityEvent]:
+        """Decide the pending episodes at the end of the stream with the latest estimates.
+
+        Coincidence episodes that never separated are dropped (all Table 1 activities end in a
+        separation). Decisions made here count as timeouts for the confidence.
+        """
+        events: list[ActivityEvent] = []
+        if self._frames:
+            cur = self._frames[-1]
+            for key, ep in list(self._pairs.items()):
+                if ep.separated_ns is not None:
+                    ev = self._decide_pair(ep, cur, timed_out=True)
+                    events += [ev] if ev else []
+                del self._pairs[key]
+            for key, st in list(self._stills.items()):
+                ev = self._decide_still(st, cur, timed_out=True)
+                events += [ev] if ev else []
+                del self._stills[key]
+        self.reset()
+        return self._ordered(events)
+
+    # -----------------------------------------------------------------------------------------
+    # history helpers
+
+    def _label_before(self, target_id: int, given: str | None) -> str | None:
+        if given is not None:
+            return given
+        for fr in reversed(self._frames):
+            snap = fr.targets.get(target_id)
+            if snap is not None and snap.phase is not Phase.COMBINED:
+                return snap.label
+        return None
+
+    def _latest_carry(self, target_id: int, t_ns: int) -> CarryEstimate | None:
+        for fr in reversed(self._frames):
+            if fr.t_ns <= t_ns and target_id in fr.carry:
+                return fr.carry[target_id]
+        return None
+
+    def _approach_start(self, ids: tuple[int, int], climax_ns: int, rule: Rule) -> int:
+        """The last time before the climax at which the two targets were ``separation_m``
+        apart, looking back at most ``max_approach_s``; else the earliest time both were seen
+        in that window; else the climax."""
+        th = rule.thresholds
+        earliest = climax_ns - _ns(th.max_approach_s)
+        start = climax_ns
+        for fr in reversed(self._frames):
+            if fr.t_ns > climax_ns:
+                continue
+            if fr.t_ns < earliest:
+                break
+            d = _distance(fr.targets.get(ids[0]), fr.targets.get(ids[1]))
+            if d is None:
+                continue
+            start = fr.t_ns
+            if d >= th.separation_m:
+                break
+        return start
+
+    def _head_of(self, person: int) -> np.ndarray | None:
+        label = f"p{person}/head"
+        for fr in reversed(self._frames):
+            for snap in fr.targets.values():
+                if snap.label == label and snap.phase is not Phase.LOST:
+                    return snap.mean_m
+        return None
+
+    # -----------------------------------------------------------------------------------------
+    # coincidence episodes
+
+    def _open_pair(
+        self,
+        rule: Rule,
+        ids: tuple[int, int],
+        labels: tuple[str, str],
+        t_ns: int,
+        combined: bool,
+    ) -> None:
+        key = (rule.name, frozenset(ids))
+        if not _orders(rule, labels) or not _persons_ok(rule, labels):
+            return
+        before = (self._latest_carry(ids[0], t_ns), self._latest_carry(ids[1], t_ns))
+        self._pairs[key] = _PairEpisode(
+            rule=rule,
+            ids=list(ids),
+            labels=labels,
+            climax_ns=t_ns,
+            start_ns=self._approach_start(ids, t_ns, rule),
+            before=before,
+            combined=combined,
+        )
+        log.debug("%s: climax of %s at %d ns", rule.rule_id, "+".join(labels), t_ns)
+
+    def _on_transitions(self, frame: TrackFrame, cur: _Frame, prev: _Frame | None) -> None:
+        for tr in frame.transitions:
+            if tr.partner_id is None:
+                continue
+            if tr.new is Phase.COMBINED and tr.old is not Phase.COMBINED:
+                ids = (tr.target_id, tr.partner_id)
+                partner_label = self._label_before(tr.partner_id, tr.partner_label)
+                if partner_label is None:
+                    continue
+                for rule in self._pair_rules:
+                    ep = self._pairs.get((rule.name, frozenset(ids)))
+                    if ep is not None:
+                        ep.combined = True
+                        continue
+                    labels = (tr.label, partner_label)
+                    self._open_pair(rule, ids, labels, cur.t_ns, combined=True)
+            elif tr.old is Phase.COMBINED and tr.new in (Phase.UNLABELLED, Phase.NORMAL):
+                for ep in self._pairs.values():
+                    if tr.target_id not in ep.ids or ep.separated_ns is not None:
+                        continue
+                    other = ep.ids[1 - ep.ids.index(tr.target_id)]
+                    if tr.partner_id != other and tr.partner_id not in ep.ids:
+                        # the tracker that separated from it is a new one: it takes the place
+                        # of the partner that is gone
+                        ep.ids[ep.ids.index(other)] = tr.partner_id
+                    ep.separated_ns = cur.t_ns
+
+    def _open_by_proximity(self, cur: _Frame) -> None:
+        live = [
+            s
+            for s in cur.targets.values()
+            if s.phase is Phase.NORMAL and s.limb is not Limb.UNKNOWN
+        ]
+        for rule in self._pair_rules:
+            th = rule.thresholds
+            if th.coincidence_m <= 0:
+                continue
+            for i, a in enumerate(live):
+                for b in live[i + 1 :]:
+                    key = (rule.name, frozenset((a.target_id, b.target_id)))
+                    if key in self._pairs or key in self._pair_disarmed:
+                        continue
+                    d = _distance(a, b)
+                    if d is not None and d < th.coincidence_m:
+                        self._open_pair(
+                            rule, (a.target_id, b.target_id), (a.label, b.label), cur.t_ns, False
+                        )
+
+    def _advance_pairs(self, cur: _Frame) -> list[ActivityEvent]:
+        events = []
+        t = cur.t_ns
+        for key, ep in list(self._pairs.items()):
+            th = ep.rule.thresholds
+            d = _distance(cur.targets.get(ep.ids[0]), cur.targets.get(ep.ids[1]))
+            if ep.separated_ns is None:
+                if not ep.combined and (d is None or d > th.coincidence_m):
+                    ep.separated_ns = t
+                elif t - ep.climax_ns > _ns(th.max_coincidence_s):
+                    log.debug("%s: gave up %s (no separation)", ep.rule.rule_id, ep.labels)
+                    del self._pairs[key]
+                    self._pair_disarmed.add(key)
+                    continue
+                else:
+                    continue
+            if ep.apart_ns is None and d is not None and d >= th.separation_m:
+                ep.apart_ns = t
+            ready = ep.apart_ns is not None and t - ep.apart_ns >= _ns(th.separation_delay_s)
+            timed_out = t - ep.separated_ns >= _ns(th.separation_timeout_s)
+            if ready or timed_out:
+                ev = self._decide_pair(ep, cur, timed_out=not ready)
+                events += [ev] if ev else []
+                del self._pairs[key]
+                self._pair_disarmed.add((key[0], frozenset(ep.ids)))
+        return events
+
+    def _decide_pair(self, ep: _PairEpisode, cur: _Frame, timed_out: bool) -> ActivityEvent | None:
+        rule, th, t = ep.rule, ep.rule.thresholds, cur.t_ns
+        # which tracker holds each pre-join label now: by label if relabelled, else by id
+        now = {i: cur.targets[i].label for i in ep.ids if i in cur.targets}
+        holders = []
+        for k, lab in enumerate(ep.labels):
+            holders.append(next((i for i in ep.ids if now.get(i) == lab), ep.ids[k]))
+        after = tuple(self._latest_carry(h, t) for h in holders)
+        for a, b in _orders(rule, ep.labels):
+            bef = (ep.before[a], ep.before[b])
+            aft = (after[a], after[b])
+            used: list[CarryEstimate | None] = []
+            ok = True
+            for k in (0, 1):
+                for req, est in ((rule.carry_before[k], bef[k]), (rule.carry_after[k], aft[k])):
+                    if req is None:
+                        continue
+                    used.append(est)
+                    ok &= carry_satisfies(req, carry_state(est, th.min_confidence))
+            if not ok:
+                continue
+            moved_ab = object_moved(
+                bef[0], aft[0], aft[1], th.min_confidence, th.hue_tolerance_deg
+            )
+            moved_ba = object_moved(
+                bef[1], aft[1], aft[0], th.min_confidence, th.hue_tolerance_deg
+            )
+            if rule.transfer == "a_to_b" and not moved_ab:
+                continue
+            if rule.transfer == "none" and (moved_ab or moved_ba):
+                continue
+            if rule.transfer != "any":
+                used += [bef[0], aft[1]] if rule.transfer == "a_to_b" else [*bef, *aft]
+            labels = (ep.labels[a], ep.labels[b])
+            hue = None
+            if moved_ab:
+                hue = bef[0].hue_deg  # type: ignore[union-attr]
+            elif moved_ba:
+                hue = bef[1].hue_deg  # type: ignore[union-attr]
+            else:
+                hue = _first_hue([e for e in used if e is not None], th.min_confidence)
+            return ActivityEvent(
+                activity=rule.name,
+                start_ns=min(ep.start_ns, ep.climax_ns),
+                climax_ns=ep.climax_ns,
+                end_ns=max(t, ep.climax_ns),
+                actors=labels,
+                persons=_persons(labels),
+                rule=rule.rule_id,
+                confidence=_confidence(used, timed_out, th.timeout_confidence_factor),
+                object_hue_deg=hue,
+                from_actor=labels[0] if moved_ab else labels[1] if moved_ba else None,
+                to_actor=labels[1] if moved_ab else labels[0] if moved_ba else None,
+            )
+        log.debug("%s: %s did not match", rule.rule_id, "+".join(ep.labels))
+        return None
+
+    # -----------------------------------------------------------------------------------------
+    # still episodes (pick / place)
+
+    def _hand_track(self, hand_id: int, since_ns: int) -> tuple[np.ndarray, np.ndarray, bool]:
+        """(t_ns (T,), points_m (T, 3), all normal) of a hand since ``since_ns``."""
+        ts, ps, normal = [], [], True
+        for fr in self._frames:
+            if fr.t_ns < since_ns:
+                continue
+            snap = fr.targets.get(hand_id)
+            if snap is None:
+                continue
+            ts.append(fr.t_ns)
+            ps.append(snap.mean_m)
+            normal &= snap.phase is Phase.NORMAL
+        return (
+            np.array(ts, dtype=np.int64),
+            np.array(ps, dtype=np.float64).reshape(-1, 3),
+            normal,
+        )
+
+    def _open_stills(self, cur: _Frame) -> None:
+        for rule in self._scene_rules:
+            th = rule.thresholds
+            for hand in cur.targets.values():
+                key = (rule.name, hand.target_id)
+                if (
+                    hand.phase is not Phase.NORMAL
+                    or not label_matches(rule.limbs[0], hand.label)
+                    or key in self._stills
+                    or key in self._still_disarmed
+                ):
+                    continue
+                since = cur.t_ns - _ns(th.max_approach_s + th.still_s)
+                ts, ps, _ = self._hand_track(hand.target_id, since)
+                first = still_since(ts, ps, th.still_s, th.still_speed_mps)
+                if first is None:
+                    continue
+                _, _, normal = self._hand_track(hand.target_id, int(ts[first]))
+                point = ps[first:].mean(axis=0)
+                head = self._head_of(hand.person)
+                if not normal or head is None:
+                    continue
+                if not away_from_body(point, head, th.shoulder_drop_m, th.min_reach_m):
+                    continue
+                if th.coincidence_m > 0 and any(
+                    o.target_id != hand.target_id
+                    and o.phase is not Phase.LOST
+                    and float(np.linalg.norm(o.mean_m - hand.mean_m)) < th.coincidence_m
+                    for o in cur.targets.values()
+                ):
+                    continue
+                far = np.linalg.norm(ps[:first] - point, axis=1) >= th.separation_m
+                if not far.any():
+                    continue  # no reach: the hand did not come from separation_m away
+                start = int(ts[:first][far][-1])
+                climax = int(ts[first])
+                self._stills[key] = _StillEpisode(
+                    rule=rule,
+                    hand_id=hand.target_id,
+                    label=hand.label,
+                    climax_ns=climax,
+                    start_ns=start,
+                    detected_ns=cur.t_ns,
+                    point_m=point,
+                    before=self._latest_carry(hand.target_id, start),
+                )
+                log.debug("%s: %s still at %d ns", rule.rule_id, hand.label, climax)
+
+    def _advance_stills(self, cur: _Frame) -> list[ActivityEvent]:
+        events = []
+        t = cur.t_ns
+        for key, st in list(self._stills.items()):
+            th = st.rule.thresholds
+            snap = cur.targets.get(st.hand_id)
+            if st.apart_ns is None and snap is not None:
+                if float(np.linalg.norm(snap.mean_m - st.point_m)) >= th.separation_m:
+                    st.apart_ns = t
+            ready = st.apart_ns is not None and t - st.apart_ns >= _ns(th.separation_delay_s)
+            timed_out = t - st.detected_ns >= _ns(th.separation_timeout_s)
+            if ready or timed_out:
+                ev = self._decide_still(st, cur, timed_out=not ready)
+                events += [ev] if ev else []
+                del self._stills[key]
+                self._still_disarmed[key] = st.point_m
+        return events
+
+    def _decide_still(
+        self, st: _StillEpisode, cur: _Frame, timed_out: bool
+    ) -> ActivityEvent | None:
+        rule, th = st.rule, st.rule.thresholds
+        after = self._latest_carry(st.hand_id, cur.t_ns)
+        used: list[CarryEstimate | None] = []
+        for req, est in ((rule.carry_before[0], st.before), (rule.carry_after[0], after)):
+            if req is None:
+                continue
+            used.append(est)
+            if not carry_satisfies(req, carry_state(est, th.min_confidence)):
+                log.debug("%s: %s did not match", rule.rule_id, st.label)
+                return None
+        return ActivityEvent(
+            activity=rule.name,
+            start_ns=min(st.start_ns, st.climax_ns),
+            climax_ns=st.climax_ns,
+            end_ns=max(cur.t_ns, st.climax_ns),
+            actors=(st.label,),
+            persons=_persons((st.label,)),
+            rule=rule.rule_id,
+            confidence=_confidence(used, timed_out, th.timeout_confidence_factor),
+            object_hue_deg=_first_hue([e for e in used if e is not None], th.min_confidence),
+        )
+
+    # -----------------------------------------------------------------------------------------
+
+    def _rearm(self, cur: _Frame) -> None:
+        """Re-arm pairs and hands that are far enough apart again; forget absent trackers."""
+        for key in list(self._pair_disarmed):
+            rule = self.rules[key[0]]
+            a, b = sorted(key[1])
+            if a not in cur.targets or b not in cur.targets:
+                self._pair_disarmed.discard(key)
+                continue
+            d = _distance(cur.targets[a], cur.targets[b])
+            if d is not None and d >= rule.thresholds.separation_m:
+                self._pair_disarmed.discard(key)
+        for key, point in list(self._still_disarmed.items()):
+            snap = cur.targets.get(key[1])
+            rule = self.rules[key[0]]
+            if snap is None or np.linalg.norm(snap.mean_m - point) >= rule.thresholds.separation_m:
+                del self._still_disarmed[key]
+
+    def _ordered(self, events: list[ActivityEvent]) -> list[ActivityEvent]:
+        order = {r.name: i for i, r in enumerate(self.rules)}
+        return sorted(events, key=lambda e: (e.climax_ns, order.get(e.activity, 0), e.actors))
+
+
+def _confidence(used: list[CarryEstimate | None], timed_out: bool, factor: float) -> float:
+    confs = [e.confidence for e in used if e is not None]
+    conf = float(np.mean(confs)) if confs else 1.0
+    conf = min(max(conf, 0.0), 1.0)
+    return conf * factor if timed_out else conf
+
+
+def _first_hue(estimates: list[CarryEstimate], min_confidence: float) -> float | None:
+    for est in estimates:
+        if carry_state(est, min_confidence) is True and est.hue_deg is not None:
+            return float(est.hue_deg)
+    return None
