@@ -1,0 +1,284 @@
+"""Labelling cues: head vs hand, person grouping, left vs right, and the angle rule.
+
+Paper 004 leaves the labelling cues to the application (section 5.2) and gives one rule,
+for two targets that separate after being combined (section 7.1). The cues used here, all
+pure functions of the trackers' estimates (and, when the caller has them, the candidates'
+blobs), are:
+
+**Head vs hand** -- a log-odds score (positive = head) summed from clipped cues and smoothed
+over frames by the manager:
+
+- height above the floor (heads of standing and seated people are higher than resting
+  hands): ``(z - head_z_mid) / head_z_scale``;
+- the body's vertical structure: another target right above (within a horizontal radius,
+  0.2-1.2 m higher) means "I am a hand hanging below a head";
+- position in the silhouette, when observations are given: the mean relative v of the
+  candidate's two blobs (``BlobSet.rel_v``, 0 at the top of the silhouette);
+- motion: hands move fast, heads slowly.
+
+**Person grouping** -- a new head starts a new person (numbers p1, p2, ... in order of
+labelling, never reused); a hand joins the nearest head within arm's reach if that head is
+clearly nearer than the second nearest and the person has fewer than two hands.
+
+**Left vs right** -- from the person's *facing direction*, accumulated over time from three
+cues: the head's walking direction (people walk forwards), the hands' forward excursions
+(reaching, clapping and handshakes happen in front of the body: the offset of the two hands'
+midpoint from the head, along the normal of the hand-to-hand line, beyond a dead zone), and
+the direction to the nearest other person (interacting people face each other). With facing
+f = (fx, fy), the person's left is (-fy, fx); of two hands, the one farther left is the left
+hand; a lone hand is decided by the side it is on. Left / right is decided once (when the
+facing evidence is strong enough, or after a maximum wait) and then kept.
+
+**Angle rule (section 7.1)** -- when a combined pair separates, the vector joining the two
+targets just before they combined is compared with the vector joining the two modes after
+separation; the tracker that was at the tail of the first vector takes the mode at the tail of
+the second if the angle between them is below 90 degrees, the other mode otherwise.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from surveil.datatypes import Limb
+from surveil.tracking.settings import LabellingConfig
+from surveil.validate import require_shape
+
+
+def below_another(positions_m: np.ndarray, cfg: LabellingConfig) -> np.ndarray:
+    """(T,) bool: some other target is right above this one (horizontal distance at most
+    ``below_radius_m``, ``below_dz_min_m``-``below_dz_max_m`` higher).
+
+    >>> p = np.array([[0.0, 0, 1.7], [0.1, 0.2, 0.8], [2.0, 0, 0.8]])
+    >>> below_another(p, LabellingConfig()).tolist()
+    [False, True, False]
+    """
+    require_shape("positions_m", positions_m, (None, 3), np.floating)
+    dxy = np.linalg.norm(positions_m[None, :, :2] - positions_m[:, None, :2], axis=2)
+    dz = positions_m[None, :, 2] - positions_m[:, None, 2]  # [i, j]: how much j is above i
+    above = (dxy <= cfg.below_radius_m) & (dz >= cfg.below_dz_min_m) & (dz <= cfg.below_dz_max_m)
+    np.fill_diagonal(above, False)
+    return above.any(axis=1)
+
+
+def head_log_odds(
+    z_m: np.ndarray,
+    speed_mps: np.ndarray,
+    below: np.ndarray,
+    rel_v: np.ndarray,
+    cfg: LabellingConfig,
+) -> np.ndarray:
+    """Per-frame log-odds that each target is a head rather than a hand (sum of clipped cues).
+
+    Parameters
+    ----------
+    z_m : (T,) float64
+        Height above the floor, metres.
+    speed_mps : (T,) float64
+        Smoothed speed, m/s.
+    below : (T,) bool
+        Another target is right above (:func:`below_another`).
+    rel_v : (T,) float64
+        Mean relative v of the supporting blobs in their silhouettes (0 top, 1 bottom); NaN
+        where unknown (no observations).
+    cfg : LabellingConfig
+
+    Returns
+    -------
+    (T,) float64
+
+    Examples
+    --------
+    >>> cfg = LabellingConfig()
+    >>> head_log_odds(np.array([1.7, 0.8]), np.zeros(2), np.array([False, True]),
+    ...               np.full(2, np.nan), cfg).tolist()
+    [3.0, -6.0]
+    """
+    c = cfg.cue_clip
+    llr = np.clip((np.asarray(z_m) - cfg.head_z_mid_m) / cfg.head_z_scale_m, -c, c)
+    llr = llr - np.where(below, cfg.below_llr, 0.0)
+    llr = llr - np.where(np.asarray(speed_mps) > cfg.hand_speed_mps, cfg.speed_llr, 0.0)
+    rel_v = np.asarray(rel_v, dtype=np.float64)
+    sil = np.clip((cfg.rel_v_mid - rel_v) / cfg.rel_v_scale, -c, c)
+    return llr + np.where(np.isfinite(sil), sil, 0.0)
+
+
+def nearest_person(
+    hand_m: np.ndarray, heads_m: np.ndarray, n_hands: np.ndarray, cfg: LabellingConfig
+) -> int:
+    """Index of the person (head) a hand belongs to, or -1 if none is clear.
+
+    The nearest head must be within ``arm_reach_m`` (3-D), at least ``person_margin_m``
+    nearer than the second nearest head, and its person must have fewer than two hands.
+
+    Parameters
+    ----------
+    hand_m : (3,) float64
+    heads_m : (P, 3) float64
+    n_hands : (P,) int -- hands each person already has
+    cfg : LabellingConfig
+
+    Examples
+    --------
+    >>> heads = np.array([[0.0, 0, 1.7], [1.0, 0, 1.7]])
+    >>> nearest_person(np.array([0.1, 0.25, 0.9]), heads, np.array([0, 0]), LabellingConfig())
+    0
+    """
+    if len(heads_m) == 0:
+        return -1
+    d = np.linalg.norm(heads_m - hand_m, axis=1)
+    order = np.argsort(d)
+    best = int(order[0])
+    if d[best] > cfg.arm_reach_m or n_hands[best] >= 2:
+        return -1
+    if len(d) > 1 and d[order[1]] - d[best] < cfg.person_margin_m:
+        return -1
+    return best
+
+
+def left_axis(facing_xy: np.ndarray) -> np.ndarray:
+    """(2,) unit vector to the left of a facing direction (Z up): (-fy, fx).
+
+    >>> left_axis(np.array([1.0, 0.0])).tolist()
+    [-0.0, 1.0]
+    """
+    f = np.asarray(facing_xy, dtype=np.float64)
+    n = np.linalg.norm(f)
+    f = f / n if n > 0 else np.array([1.0, 0.0])
+    return np.array([-f[1], f[0]])
+
+
+def lateral_offsets_m(
+    hands_m: np.ndarray, head_m: np.ndarray, facing_xy: np.ndarray
+) -> np.ndarray:
+    """(H,) how far each hand is to the person's left of the head (negative = right), m."""
+    return (np.asarray(hands_m)[:, :2] - np.asarray(head_m)[:2]) @ left_axis(facing_xy)
+
+
+def decide_left_right(
+    hands_m: np.ndarray, head_m: np.ndarray, facing_xy: np.ndarray
+) -> tuple[Limb, ...]:
+    """Left / right for one or two hands of a person facing ``facing_xy``.
+
+    Two hands: the one farther to the left is the left hand. One hand: the side it is on.
+
+    Parameters
+    ----------
+    hands_m : (H, 3) float64, H in {1, 2}
+    head_m : (3,) float64
+    facing_xy : (2,) float64 -- horizontal facing direction (need not be unit)
+
+    Returns
+    -------
+    tuple of Limb, one per hand
+
+    Examples
+    --------
+    >>> hands = np.array([[0.0, -0.25, 0.8], [0.0, 0.25, 0.8]])
+    >>> decide_left_right(hands, np.array([0.0, 0, 1.7]), np.array([1.0, 0]))
+    (<Limb.RIGHT_HAND: 2>, <Limb.LEFT_HAND: 1>)
+    """
+    hands_m = np.asarray(hands_m, dtype=np.float64)
+    require_shape("hands_m", hands_m, (None, 3), np.floating)
+    lat = lateral_offsets_m(hands_m, head_m, facing_xy)
+    if len(hands_m) == 1:
+        return (Limb.LEFT_HAND if lat[0] >= 0 else Limb.RIGHT_HAND,)
+    if len(hands_m) == 2:
+        left_first = lat[0] >= lat[1]
+        return (
+            (Limb.LEFT_HAND, Limb.RIGHT_HAND) if left_first else (Limb.RIGHT_HAND, Limb.LEFT_HAND)
+        )
+    raise ValueError(f"hands_m must hold 1 or 2 hands, got {len(hands_m)}")
+
+
+def facing_cues(
+    head_m: np.ndarray,
+    head_velocity_mps: np.ndarray,
+    hands_m: np.ndarray,
+    other_heads_m: np.ndarray,
+    cfg: LabellingConfig,
+) -> np.ndarray:
+    """One frame's horizontal facing evidence (2,) for one person (added to a decaying sum).
+
+    Cues (see the module docstring): walking direction (unit, weight 0.3 when the head moves
+    faster than ``walk_speed_mps``); the two hands' forward excursion (unit normal of the
+    hand-to-hand line towards their midpoint, weight growing from 0 at 5 cm to 1 at 15 cm of
+    offset); the direction to the nearest other head within ``social_range_m`` (weight
+    ``social_weight``).
+
+    Parameters
+    ----------
+    head_m : (3,) float64
+    head_velocity_mps : (3,) float64
+    hands_m : (H, 3) float64 -- the person's hands (0, 1 or 2)
+    other_heads_m : (P, 3) float64 -- other people's heads
+    cfg : LabellingConfig
+
+    Returns
+    -------
+    (2,) float64
+
+    Examples
+    --------
+    >>> hands = np.array([[0.4, -0.1, 1.1], [0.4, 0.1, 1.1]])   # clapping in front (+x)
+    >>> facing_cues(np.array([0.0, 0, 1.7]), np.zeros(3), hands, np.zeros((0, 3)),
+    ...             LabellingConfig()).round(3).tolist()
+    [1.0, 0.0]
+    """
+    ev = np.zeros(2)
+    v = np.asarray(head_velocity_mps, dtype=np.float64)[:2]
+    speed = float(np.linalg.norm(v))
+    if speed > cfg.walk_speed_mps:
+        ev += 0.3 * v / speed
+    hands_m = np.asarray(hands_m, dtype=np.float64).reshape(-1, 3)
+    if len(hands_m) == 2:
+        across = hands_m[0, :2] - hands_m[1, :2]
+        n_across = float(np.linalg.norm(across))
+        mid = hands_m[:, :2].mean(axis=0) - head_m[:2]
+        if n_across > 1e-3:
+            normal = np.array([-across[1], across[0]]) / n_across
+            fwd = float(mid @ normal)
+        else:  # hands together: the midpoint offset itself
+            n_mid = float(np.linalg.norm(mid))
+            normal = mid / n_mid if n_mid > 0 else np.zeros(2)
+            fwd = n_mid
+        ev += np.sign(fwd) * normal * np.clip((abs(fwd) - 0.05) / 0.1, 0.0, 1.0)
+    others = np.asarray(other_heads_m, dtype=np.float64).reshape(-1, 3)
+    if len(others):
+        d = others[:, :2] - head_m[:2]
+        dist = np.linalg.norm(d, axis=1)
+        k = int(np.argmin(dist))
+        if 1e-6 < dist[k] <= cfg.social_range_m:
+            ev += cfg.social_weight * d[k] / dist[k]
+    return ev
+
+
+def angle_rule(
+    before_a_to_b_m: np.ndarray, mode0_m: np.ndarray, mode1_m: np.ndarray
+) -> tuple[tuple[int, int], float]:
+    """Which mode each tracker of a separating pair takes (paper 004 section 7.1).
+
+    Before joining, tracker A was at p_A and tracker B at p_B: v_before = p_B - p_A. After
+    separating, the modes are m0 and m1: v_after = m1 - m0. If the angle between v_before and
+    v_after is at most 90 degrees A takes m0 and B takes m1, otherwise A takes m1 and B m0.
+
+    Parameters
+    ----------
+    before_a_to_b_m : (3,) float64 -- v_before, metres
+    mode0_m, mode1_m : (3,) float64
+
+    Returns
+    -------
+    (mode of A, mode of B) : tuple[int, int]
+    angle_rad : float
+        The angle between v_before and v_after, radians (pi/2 when either is zero).
+
+    Examples
+    --------
+    >>> angle_rule(np.array([0.2, 0, 0]), np.array([0.1, 0, 0]), np.array([-0.1, 0, 0]))[0]
+    (1, 0)
+    """
+    v0 = np.asarray(before_a_to_b_m, dtype=np.float64)
+    v1 = np.asarray(mode1_m, dtype=np.float64) - np.asarray(mode0_m, dtype=np.float64)
+    n = float(np.linalg.norm(v0) * np.linalg.norm(v1))
+    angle = float(np.arccos(np.clip(v0 @ v1 / n, -1.0, 1.0))) if n > 0 else np.pi / 2
+    return ((0, 1) if angle <= np.pi / 2 else (1, 0)), angle

@@ -1,0 +1,107 @@
+"""The per-tracker finite state machine of paper 004 section 5.2 (Fig. 1), as a pure function.
+
+States (:class:`surveil.datatypes.Phase`) and the transitions :func:`next_phase` makes:
+
+==============  ==============================================  ==============
+from            when                                            to
+==============  ==============================================  ==============
+uninitialised   an unexplained strong candidate persisted       unlabelled
+unlabelled      unsupported for ``lost_frames`` frame sets      lost
+unlabelled      its estimate came within ``combine_distance``   combined
+                of another tracker's
+unlabelled      the labelling cues gave it a full label         normal
+normal          unsupported for ``lost_frames``                 lost
+normal          close to another tracker (as above)             combined
+combined        unsupported for ``lost_frames`` (pooled level)  lost
+combined        the two modes stayed apart                      unlabelled
+lost            retired: lost for ``retire_s`` (or              uninitialised
+                ``retire_unlabelled_s`` if never labelled)
+lost            a candidate near its last position re-acquired  unlabelled
+                it
+==============  ==============================================  ==============
+
+Choices where the paper is silent, written down here:
+
+- A lost tracker returns to *unlabelled* (it "behaves like an uninitialised one", and an
+  initialised tracker is unlabelled), but keeps its label; the labelling step then moves it
+  to *normal* at once, so labels are stable for the life of the track.
+- Retiring is the transition lost -> uninitialised: the tracker returns to the pool (the
+  manager removes it). Its id is never reused.
+- Losing support beats every other transition (a combined pair with no candidate is lost,
+  both trackers at once, since they share one pooled likelihood level).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from surveil.datatypes import Phase
+from surveil.tracking.settings import LifecycleConfig
+
+
+@dataclass(frozen=True, slots=True)
+class Evidence:
+    """What the manager measured about one tracker in this step.
+
+    confirmed : bool -- (uninitialised) its seed candidate persisted long enough
+    misses : int -- consecutive frame sets with a likelihood level below ``lost_level``
+    partner_id : int | None -- (unlabelled/normal) the tracker it is paired with to combine
+    separated : bool -- (combined) the two modes stayed apart long enough
+    labelled : bool -- it has a full label (person and limb)
+    reacquired : bool -- (lost) a candidate near its last position was found
+    lost_for_s : float -- (lost) time since it was lost, s
+    ever_labelled : bool -- it had a full label at some point
+    """
+
+    confirmed: bool = False
+    misses: int = 0
+    partner_id: int | None = None
+    separated: bool = False
+    labelled: bool = False
+    reacquired: bool = False
+    lost_for_s: float = 0.0
+    ever_labelled: bool = False
+
+
+def next_phase(phase: Phase, ev: Evidence, cfg: LifecycleConfig) -> Phase:
+    """The tracker's phase after this step (paper 004 Fig. 1; table in the module docstring).
+
+    Parameters
+    ----------
+    phase : Phase
+        Current phase.
+    ev : Evidence
+        This step's measurements.
+    cfg : LifecycleConfig
+
+    Returns
+    -------
+    Phase
+
+    Examples
+    --------
+    >>> cfg = LifecycleConfig(lost_frames=3)
+    >>> next_phase(Phase.NORMAL, Evidence(misses=3), cfg)
+    <Phase.LOST: 'lost'>
+    >>> next_phase(Phase.NORMAL, Evidence(partner_id=4), cfg)
+    <Phase.COMBINED: 'combined'>
+    """
+    match phase:
+        case Phase.UNINITIALISED:
+            return Phase.UNLABELLED if ev.confirmed else phase
+        case Phase.UNLABELLED | Phase.NORMAL | Phase.COMBINED if ev.misses >= cfg.lost_frames:
+            return Phase.LOST
+        case Phase.UNLABELLED | Phase.NORMAL if ev.partner_id is not None:
+            return Phase.COMBINED
+        case Phase.UNLABELLED:
+            return Phase.NORMAL if ev.labelled else phase
+        case Phase.NORMAL:
+            return phase
+        case Phase.COMBINED:
+            return Phase.UNLABELLED if ev.separated else phase
+        case Phase.LOST:
+            retire_s = cfg.retire_s if ev.ever_labelled else cfg.retire_unlabelled_s
+            if ev.lost_for_s >= retire_s:
+                return Phase.UNINITIALISED
+            return Phase.UNLABELLED if ev.reacquired else phase
+    raise AssertionError(f"unhandled phase {phase}")  # unreachable: programming error

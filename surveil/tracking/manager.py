@@ -1,0 +1,780 @@
+"""The multi-target 3-D tracker: parallel SIR filters + the Fig. 1 state machine (paper 004 §5).
+
+:class:`MultiTargetTracker` owns the particles of every tracker in one array (tracker k's
+particles are the contiguous block ``k*N:(k+1)*N``), the trackers' phases and labels, and the
+people. One :meth:`MultiTargetTracker.step` per frame set:
+
+1. predict every active particle by the constant-velocity model (hand or head noise);
+2. weight all particles of all targets by eq. 17 in one array operation; estimate (posterior
+   mean / covariance) and resample every block (a combined pair pools its two blocks, splits
+   the pool into two modes by weighted 2-means and resamples each mode into one block);
+3. measure the lifecycle evidence: likelihood level (lost), distances (combine), mode
+   distances (separate), candidates near lost targets (re-acquire);
+4. labelling cues (head / hand, person, left / right) for unlabelled trackers;
+5. the pure :func:`surveil.tracking.lifecycle.next_phase` for every tracker; apply the
+   changes (angle rule on separation, re-initialisation on re-acquisition, removal on
+   retirement) and record them as :class:`surveil.datatypes.Transition`;
+6. start trackers at strong candidates that no live tracker explains and that persisted.
+
+Randomness: one ``np.random.Generator`` seeded from ``seed`` serves the whole particle array
+(the particles are sampled in one batch, not per target); the same seed and inputs give the
+same output. Same for ``reset()``.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from surveil.camera import Rig
+from surveil.datatypes import (
+    CameraObservation,
+    CandidateSet,
+    Limb,
+    Phase,
+    TargetSnapshot,
+    TrackFrame,
+    Transition,
+    make_label,
+)
+from surveil.tracking import labelling as lab
+from surveil.tracking import sir
+from surveil.tracking.lifecycle import Evidence, next_phase
+from surveil.tracking.settings import TrackingConfig
+
+log = logging.getLogger(__name__)
+
+ACTIVE = (Phase.UNLABELLED, Phase.NORMAL, Phase.COMBINED)
+
+
+@dataclass(slots=True, eq=False)
+class _Track:
+    """Mutable bookkeeping of one tracker (its particles live in the manager's array)."""
+
+    id: int
+    phase: Phase
+    born_ns: int
+    mean_m: np.ndarray
+    cov_m2: np.ndarray
+    vel_mps: np.ndarray
+    last_good_m: np.ndarray
+    person: int = 0
+    limb: Limb = Limb.UNKNOWN
+    is_hand: bool | None = None  # typed as hand (True) / head (False); None = not yet
+    attached_ns: int | None = None  # when a hand joined its person
+    misses: int = 0
+    level: float = 0.0
+    lost_since_ns: int | None = None
+    ever_labelled: bool = False
+    type_llr: float = 0.0
+    typed_frames: int = 0
+    speed_ema_mps: float = 0.0
+    partner: int | None = None
+    before_vec_m: np.ndarray | None = None
+    apart_frames: int = 0
+
+    @property
+    def label(self) -> str:
+        return make_label(self.person, self.limb, self.id)
+
+    @property
+    def labelled(self) -> bool:
+        return self.person > 0 and self.limb is not Limb.UNKNOWN
+
+
+@dataclass(slots=True, eq=False)
+class _Person:
+    number: int
+    head_id: int | None
+    born_ns: int
+    facing_ev: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    hand_ids: list[int] = field(default_factory=list)
+
+
+@dataclass(slots=True)
+class _Pending:
+    position_m: np.ndarray
+    count: int
+    velocity_mps: np.ndarray
+
+
+class MultiTargetTracker:
+    """Track heads and hands in 3-D from candidate points (paper 004 sections 4-5, 7.1).
+
+    Parameters
+    ----------
+    cfg : TrackingConfig
+    rig : Rig
+        The cameras, in the order ``CandidateSet.cam_pairs`` indexes.
+    seed : int
+        Seed of the particle random generator.
+
+    Examples
+    --------
+    >>> from surveil.camera import Rig, look_at
+    >>> cam = look_at("c0", np.array([0.0, 0, 2]), np.array([1.0, 0, 1]),
+    ...               width=640, height=480, hfov_deg=60)
+    >>> trk = MultiTargetTracker(TrackingConfig(), Rig((cam,)), seed=0)
+    >>> cands = CandidateSet(np.array([[1.0, 0.0, 1.0]]), np.array([0.9]))
+    >>> [len(trk.step(i * 66_666_667, cands).targets) for i in range(3)]
+    [0, 1, 1]
+    """
+
+    def __init__(self, cfg: TrackingConfig, rig: Rig, *, seed: int) -> None:
+        if not isinstance(cfg, TrackingConfig):
+            raise TypeError(f"cfg must be a TrackingConfig, got {type(cfg).__name__}")
+        if not isinstance(rig, Rig):
+            raise TypeError(f"rig must be a Rig, got {type(rig).__name__}")
+        self.cfg = cfg
+        self.rig = rig
+        self.seed = int(seed)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget every tracker, person and pending candidate; re-seed the generator."""
+        self._rng = np.random.default_rng(self.seed)
+        self._tracks: dict[int, _Track] = {}
+        self._states = np.zeros((0, sir.STATE_DIM))
+        self._persons: dict[int, _Person] = {}
+        self._pending: list[_Pending] = []
+        self._next_id = 1
+        self._next_person = 1
+        self._last_t_ns: int | None = None
+
+    # ------------------------------------------------------------------ public step
+
+    def step(
+        self,
+        t_ns: int,
+        candidates: CandidateSet,
+        observations: Mapping[str, CameraObservation] | None = None,
+    ) -> TrackFrame:
+        """Advance every tracker to time ``t_ns`` with this frame set's candidates.
+
+        Parameters
+        ----------
+        t_ns : int
+            Time of the frame set, ns on the recording clock (non-decreasing between calls;
+            frames may be skipped: the time step comes from the difference).
+        candidates : CandidateSet
+            The 3-D candidates (points in metres, priors). ``cam_pairs`` / ``blob_pairs``
+            are optional.
+        observations : Mapping[str, CameraObservation] | None
+            Per-camera blobs, used only as labelling cues (blob ``rel_v``) when the
+            candidates carry ``cam_pairs`` and ``blob_pairs``.
+
+        Returns
+        -------
+        TrackFrame
+            Live trackers (every phase but uninitialised) in id order, the phase changes of
+            this step, and the particles of the active trackers with their owners' ids.
+
+        Raises
+        ------
+        TypeError
+            ``candidates`` is not a CandidateSet.
+        ValueError
+            ``t_ns`` is earlier than the previous step's.
+        """
+        if not isinstance(candidates, CandidateSet):
+            raise TypeError(f"candidates must be a CandidateSet, got {type(candidates).__name__}")
+        t_ns = int(t_ns)
+        if self._last_t_ns is not None and t_ns < self._last_t_ns:
+            raise ValueError(
+                f"t_ns must not decrease between steps: got {t_ns} after {self._last_t_ns}"
+            )
+        dt_s = 0.0 if self._last_t_ns is None else (t_ns - self._last_t_ns) * 1e-9
+        dt_s = min(dt_s, self.cfg.filter.max_dt_s)
+        self._last_t_ns = t_ns
+        pts = np.asarray(candidates.points_m, dtype=np.float64)
+        prior = np.asarray(candidates.prior, dtype=np.float64)
+
+        self._filter(pts, prior, dt_s)
+        pairs = self._combine_pairs()
+        self._measure_separation()
+        reacquired = self._reacquire(pts, prior, t_ns)
+        rel_v = self._candidate_rel_v(candidates, observations)
+        self._label(pts, rel_v, t_ns)
+        transitions = self._advance_phases(t_ns, pairs, reacquired, pts)
+        used = set(reacquired.values())
+        transitions += self._initialise(pts, prior, t_ns, dt_s, used)
+        return self._frame(t_ns, transitions)
+
+    # ------------------------------------------------------------------ 1-2: SIR filters
+
+    def _block_rows(self, blocks: np.ndarray) -> np.ndarray:
+        n = self.cfg.filter.n_particles
+        return (np.asarray(blocks)[:, None] * n + np.arange(n)).ravel()
+
+    def _filter(self, pts: np.ndarray, prior: np.ndarray, dt_s: float) -> None:
+        fcfg = self.cfg.filter
+        n = fcfg.n_particles
+        tracks = list(self._tracks.values())
+        act = np.array([tr.phase in ACTIVE for tr in tracks], dtype=bool)
+        if not act.any():
+            return
+        blocks = np.flatnonzero(act)
+        act_tracks = [tracks[b] for b in blocks]
+        rows = self._block_rows(blocks)
+        accel = np.repeat(
+            [
+                fcfg.accel_std_head_mps2 if tr.is_hand is False else fcfg.accel_std_hand_mps2
+                for tr in act_tracks
+            ],
+            n,
+        )
+        st = sir.predict_constant_velocity(
+            self._states[rows],
+            accel,
+            dt_s,
+            self._rng,
+            jitter_m=fcfg.position_jitter_m,
+            max_speed_mps=fcfg.max_speed_mps,
+        )
+        # eq. 17 for all particles of all targets at once; w_k ∝ p(z|x) (eq. 12, SIR)
+        log_lik, support = sir.candidate_log_likelihood(
+            st[:, :3], pts, prior, fcfg.sigma_m, fcfg.clutter_level
+        )
+        starts = np.arange(len(blocks)) * n
+        level = np.add.reduceat(support, starts) / n
+        log_w, _ = sir.block_normalise(log_lik, starts)
+        mean, cov = sir.block_mean_cov(st, log_w, starts)
+        keep = sir.block_systematic_resample(np.exp(log_w), starts, self._rng)
+        new = st[keep]
+        local = {tr.id: i for i, tr in enumerate(act_tracks)}
+        done: set[int] = set()
+        for i, tr in enumerate(act_tracks):
+            if tr.phase is not Phase.COMBINED or tr.id in done or tr.partner not in local:
+                continue
+            j = local[tr.partner]
+            done.update((tr.id, tr.partner))
+            self._pooled_update(
+                i, j, act_tracks, st, log_lik, support, new, mean, cov, level, dt_s
+            )
+        self._states[rows] = new
+        for i, tr in enumerate(act_tracks):
+            tr.mean_m = mean[i, :3].copy()
+            tr.vel_mps = mean[i, 3:].copy()
+            tr.cov_m2 = cov[i, :3, :3].copy()
+            tr.level = float(level[i])
+            if tr.level < self.cfg.lifecycle.lost_level:
+                tr.misses += 1
+            else:
+                tr.misses = 0
+                tr.last_good_m = tr.mean_m.copy()
+            a = self.cfg.labelling.evidence_alpha
+            tr.speed_ema_mps = (1 - a) * tr.speed_ema_mps + a * float(np.linalg.norm(tr.vel_mps))
+
+    def _pooled_update(
+        self,
+        i: int,
+        j: int,
+        act_tracks: list[_Track],
+        st: np.ndarray,
+        log_lik: np.ndarray,
+        support: np.ndarray,
+        new: np.ndarray,
+        mean: np.ndarray,
+        cov: np.ndarray,
+        level: np.ndarray,
+        dt_s: float,
+    ) -> None:
+        """One filter for a combined pair: pool both blocks, find the two modes, give each
+        tracker the mode that continues its previous position, resample each mode."""
+        n = self.cfg.filter.n_particles
+        pool = np.concatenate([np.arange(i * n, (i + 1) * n), np.arange(j * n, (j + 1) * n)])
+        p_st = st[pool]
+        lw, _ = sir.block_normalise(log_lik[pool], np.zeros(1, dtype=np.intp))
+        w = np.exp(lw)
+        a, b = act_tracks[i], act_tracks[j]
+        init = np.stack([a.mean_m + a.vel_mps * dt_s, b.mean_m + b.vel_mps * dt_s])
+        centres, assign, mass = sir.weighted_two_means(p_st[:, :3], w, init)
+        for k, blk in ((0, i), (1, j)):
+            wk = np.where(assign == k, w, 0.0) if mass[k] > 0 else w
+            wk = wk / wk.sum()
+            idx = sir.systematic_resample(wk, self._rng)
+            new[blk * n : (blk + 1) * n] = p_st[idx]
+            m6, c6 = sir.block_mean_cov(p_st, np.log(np.maximum(wk, 1e-300)), np.zeros(1, int))
+            mean[blk], cov[blk] = m6[0], c6[0]
+        level[i] = level[j] = float(support[pool].mean())
+
+    # ------------------------------------------------------------------ 3: evidence
+
+    def _combine_pairs(self) -> dict[int, int]:
+        """Pairs of unlabelled/normal trackers whose estimates are closer than the combine
+        distance; closest first, each tracker in at most one pair (at most two targets join
+        at once, paper 004 section 5)."""
+        cand = [tr for tr in self._tracks.values() if tr.phase in (Phase.UNLABELLED, Phase.NORMAL)]
+        if len(cand) < 2:
+            return {}
+        pos = np.array([tr.mean_m for tr in cand])
+        d = np.linalg.norm(pos[:, None] - pos[None], axis=2)
+        iu, ju = np.triu_indices(len(cand), 1)
+        close = d[iu, ju] < self.cfg.lifecycle.combine_distance_m
+        pairs: dict[int, int] = {}
+        for k in np.flatnonzero(close)[np.argsort(d[iu, ju][close], kind="stable")]:
+            a, b = cand[iu[k]].id, cand[ju[k]].id
+            if a not in pairs and b not in pairs:
+                pairs[a], pairs[b] = b, a
+        return pairs
+
+    def _measure_separation(self) -> None:
+        for tr in self._tracks.values():
+            if tr.phase is Phase.COMBINED and tr.partner in self._tracks:
+                other = self._tracks[tr.partner]
+                apart = np.linalg.norm(tr.mean_m - other.mean_m)
+                if apart > self.cfg.lifecycle.separate_distance_m:
+                    tr.apart_frames += 1
+                else:
+                    tr.apart_frames = 0
+
+    def _unexplained(self, pts: np.ndarray, prior: np.ndarray, min_prior: float) -> np.ndarray:
+        """Indices of candidates with prior >= min_prior farther than explained_radius_m
+        from every active tracker's estimate."""
+        ok = prior >= min_prior
+        act = [tr.mean_m for tr in self._tracks.values() if tr.phase in ACTIVE]
+        if act and len(pts):
+            d = np.linalg.norm(pts[:, None] - np.array(act)[None], axis=2)
+            ok &= d.min(axis=1) > self.cfg.lifecycle.explained_radius_m
+        return np.flatnonzero(ok)
+
+    def _reacquire(self, pts: np.ndarray, prior: np.ndarray, t_ns: int) -> dict[int, int]:
+        """Lost tracker id -> candidate index that re-acquires it (nearest unexplained strong
+        candidate within the gate around the last known position; most recently lost first)."""
+        lc = self.cfg.lifecycle
+        lost = [tr for tr in self._tracks.values() if tr.phase is Phase.LOST]
+        if not lost or not len(pts):
+            return {}
+        free = self._unexplained(pts, prior, lc.reacquire_prior_min)
+        out: dict[int, int] = {}
+        for tr in sorted(lost, key=lambda tr: (-(tr.lost_since_ns or 0), tr.id)):
+            if not len(free):
+                break
+            lost_s = (t_ns - (tr.lost_since_ns or t_ns)) * 1e-9
+            gate = min(lc.reacquire_gate_m + lc.reacquire_speed_mps * lost_s, lc.reacquire_max_m)
+            d = np.linalg.norm(pts[free] - tr.last_good_m, axis=1)
+            k = int(np.argmin(d))
+            if d[k] <= gate:
+                out[tr.id] = int(free[k])
+                free = np.delete(free, k)
+        return out
+
+    # ------------------------------------------------------------------ 4: labelling
+
+    def _candidate_rel_v(
+        self, candidates: CandidateSet, observations: Mapping[str, CameraObservation] | None
+    ) -> np.ndarray:
+        """(K,) mean rel_v of each candidate's two blobs; NaN where unknown."""
+        k = len(candidates.points_m)
+        out = np.full(k, np.nan)
+        if not observations or candidates.cam_pairs is None or candidates.blob_pairs is None:
+            return out
+        total = np.zeros(k)
+        count = np.zeros(k)
+        for m, cam in enumerate(self.rig.cameras):
+            obs = observations.get(cam.name)
+            if obs is None or len(obs.blobs) == 0:
+                continue
+            rel = np.asarray(obs.blobs.rel_v, dtype=np.float64)
+            for col in (0, 1):
+                sel = (candidates.cam_pairs[:, col] == m) & (
+                    candidates.blob_pairs[:, col] < len(rel)
+                )
+                sel &= candidates.blob_pairs[:, col] >= 0
+                vals = rel[candidates.blob_pairs[sel, col]]
+                good = np.isfinite(vals)
+                idx = np.flatnonzero(sel)[good]
+                total[idx] += vals[good]
+                count[idx] += 1
+        has = count > 0
+        out[has] = total[has] / count[has]
+        return out
+
+    def _label(self, pts: np.ndarray, cand_rel_v: np.ndarray, t_ns: int) -> None:
+        lcfg = self.cfg.labelling
+        act = [tr for tr in self._tracks.values() if tr.phase in ACTIVE]
+        if not act:
+            return
+        pos = np.array([tr.mean_m for tr in act])
+        # per-frame type evidence for the untyped (unlabelled, not combined) trackers
+        untyped = [
+            i for i, tr in enumerate(act) if tr.is_hand is None and tr.phase is Phase.UNLABELLED
+        ]
+        if untyped:
+            below = lab.below_another(pos, lcfg)
+            rel_v = np.full(len(act), np.nan)
+            if len(pts) and np.isfinite(cand_rel_v).any():
+                d = np.linalg.norm(pos[:, None] - pts[None], axis=2)
+                near = d.argmin(axis=1)
+                ok = d[np.arange(len(act)), near] <= 2 * self.cfg.filter.sigma_m
+                rel_v[ok] = cand_rel_v[near[ok]]
+            speed = np.array([tr.speed_ema_mps for tr in act])
+            llr = lab.head_log_odds(pos[:, 2], speed, below, rel_v, lcfg)
+            for i in untyped:
+                tr = act[i]
+                tr.type_llr = (1 - lcfg.evidence_alpha) * tr.type_llr + lcfg.evidence_alpha * llr[
+                    i
+                ]
+                tr.typed_frames += 1
+                if tr.typed_frames < lcfg.min_frames:
+                    continue
+                if tr.type_llr >= lcfg.decide_llr and not self._near_head(tr):
+                    tr.is_hand = False
+                    self._new_person(tr, t_ns)
+                elif tr.type_llr <= -lcfg.decide_llr:
+                    tr.is_hand = True
+        self._attach_hands(t_ns)
+        self._update_facing()
+        self._decide_sides(t_ns)
+
+    def _near_head(self, tr: _Track) -> bool:
+        for p in self._persons.values():
+            head = self._tracks.get(p.head_id) if p.head_id is not None else None
+            if head is None or head is tr:
+                continue
+            dxy = np.linalg.norm(head.last_good_m[:2] - tr.mean_m[:2])
+            if dxy < self.cfg.labelling.duplicate_head_m:
+                return True
+        return False
+
+    def _new_person(self, head: _Track, t_ns: int) -> None:
+        number = self._next_person
+        self._next_person += 1
+        self._persons[number] = _Person(number=number, head_id=head.id, born_ns=t_ns)
+        head.person = number
+        head.limb = Limb.HEAD
+        log.debug("t%d is the head of new person p%d", head.id, number)
+
+    def _live_heads(self) -> tuple[list[_Person], np.ndarray]:
+        persons, heads = [], []
+        for p in self._persons.values():
+            head = self._tracks.get(p.head_id) if p.head_id is not None else None
+            if head is not None:
+                persons.append(p)
+                heads.append(head.mean_m if head.phase in ACTIVE else head.last_good_m)
+        return persons, np.array(heads).reshape(-1, 3)
+
+    def _attach_hands(self, t_ns: int) -> None:
+        persons, heads = self._live_heads()
+        if not persons:
+            return
+        for tr in self._tracks.values():
+            if not (tr.is_hand and tr.person == 0 and tr.phase is Phase.UNLABELLED):
+                continue
+            n_hands = np.array([len(p.hand_ids) for p in persons])
+            k = lab.nearest_person(tr.mean_m, heads, n_hands, self.cfg.labelling)
+            if k >= 0:
+                persons[k].hand_ids.append(tr.id)
+                tr.person = persons[k].number
+                tr.attached_ns = t_ns
+
+    def _update_facing(self) -> None:
+        lcfg = self.cfg.labelling
+        persons, heads = self._live_heads()
+        for i, p in enumerate(persons):
+            head = self._tracks[p.head_id]
+            if head.phase not in ACTIVE:
+                continue
+            hands = np.array(
+                [
+                    self._tracks[h].mean_m
+                    for h in p.hand_ids
+                    if h in self._tracks and self._tracks[h].phase in ACTIVE
+                ]
+            ).reshape(-1, 3)
+            others = np.delete(heads, i, axis=0)
+            ev = lab.facing_cues(head.mean_m, head.vel_mps, hands, others, lcfg)
+            p.facing_ev = lcfg.facing_decay * p.facing_ev + ev
+
+    def _facing(self, p: _Person, head_m: np.ndarray) -> np.ndarray:
+        if np.linalg.norm(p.facing_ev) > 0:
+            return p.facing_ev
+        # no evidence at all: guess the direction towards the middle of the cameras
+        centre = np.mean([c.centre_m for c in self.rig.cameras], axis=0)
+        d = centre[:2] - head_m[:2]
+        return d if np.linalg.norm(d) > 0 else np.array([1.0, 0.0])
+
+    def _decide_sides(self, t_ns: int) -> None:
+        lcfg = self.cfg.labelling
+        for p in self._persons.values():
+            head = self._tracks.get(p.head_id) if p.head_id is not None else None
+            hands = [self._tracks[h] for h in p.hand_ids if h in self._tracks]
+            undecided = [h for h in hands if h.limb is Limb.UNKNOWN]
+            if not undecided or head is None:
+                continue
+            decided = [h.limb for h in hands if h.limb is not Limb.UNKNOWN]
+            if decided:
+                other = Limb.RIGHT_HAND if decided[0] is Limb.LEFT_HAND else Limb.LEFT_HAND
+                undecided[0].limb = other
+                continue
+            head_m = head.mean_m if head.phase in ACTIVE else head.last_good_m
+            waited = max((t_ns - (h.attached_ns or t_ns)) * 1e-9 for h in undecided)
+            ready = np.linalg.norm(p.facing_ev) >= lcfg.facing_min
+            if not ready and waited < lcfg.lr_max_wait_s:
+                continue
+            facing = self._facing(p, head_m)
+            hand_m = np.array([h.mean_m for h in undecided])
+            if len(undecided) == 1:
+                lat = lab.lateral_offsets_m(hand_m, head_m, facing)[0]
+                if abs(lat) < lcfg.lr_margin_m and waited < lcfg.lr_max_wait_s:
+                    continue
+            for h, limb in zip(
+                undecided, lab.decide_left_right(hand_m, head_m, facing), strict=True
+            ):
+                h.limb = limb
+
+    # ------------------------------------------------------------------ 5: state machine
+
+    def _advance_phases(
+        self,
+        t_ns: int,
+        pairs: dict[int, int],
+        reacquired: dict[int, int],
+        pts: np.ndarray,
+    ) -> list[Transition]:
+        lc = self.cfg.lifecycle
+        plan: dict[int, Phase] = {}
+        for tr in self._tracks.values():
+            ev = Evidence(
+                misses=tr.misses,
+                partner_id=pairs.get(tr.id),
+                separated=tr.apart_frames >= lc.separate_frames,
+                labelled=tr.labelled,
+                reacquired=tr.id in reacquired,
+                lost_for_s=(t_ns - tr.lost_since_ns) * 1e-9
+                if tr.lost_since_ns is not None
+                else 0.0,
+                ever_labelled=tr.ever_labelled,
+            )
+            new = next_phase(tr.phase, ev, lc)
+            if new is Phase.COMBINED and tr.phase is not Phase.COMBINED:
+                # both of a pair must combine; a partner that goes lost instead cancels it
+                partner = self._tracks[pairs[tr.id]]
+                if partner.misses >= lc.lost_frames:
+                    new = tr.phase
+            plan[tr.id] = new
+        # a combined pair leaves together (lost or separated)
+        for tid, new in list(plan.items()):
+            tr = self._tracks[tid]
+            if tr.phase is Phase.COMBINED and tr.partner in plan:
+                if new is not Phase.COMBINED or plan[tr.partner] is not Phase.COMBINED:
+                    pnew = plan[tr.partner]
+                    plan[tid] = plan[tr.partner] = (
+                        Phase.LOST if Phase.LOST in (new, pnew) else Phase.UNLABELLED
+                    )
+        out: list[Transition] = []
+        before = {tid: (tr.label, tr.mean_m.copy()) for tid, tr in self._tracks.items()}
+        separated_done: set[int] = set()
+        for tid, new in plan.items():
+            tr = self._tracks[tid]
+            old = tr.phase
+            if new is old:
+                continue
+            partner_id: int | None = None
+            if new is Phase.COMBINED:
+                partner_id = pairs[tid]
+                tr.partner = partner_id
+                tr.before_vec_m = self._tracks[partner_id].mean_m - tr.mean_m
+                tr.apart_frames = 0
+            elif old is Phase.COMBINED:
+                partner_id = tr.partner
+                if new is Phase.UNLABELLED and tid not in separated_done:
+                    self._separate(tr, self._tracks[partner_id])
+                    separated_done.update((tid, partner_id))
+                tr.partner = None
+                tr.before_vec_m = None
+                tr.apart_frames = 0
+            if new is Phase.LOST:
+                tr.lost_since_ns = t_ns
+                tr.mean_m = tr.last_good_m.copy()
+            elif old is Phase.LOST and new is Phase.UNLABELLED:
+                self._reinit(tr, pts[reacquired[tid]], np.zeros(3))
+                tr.lost_since_ns = None
+                tr.misses = 0
+            if new is Phase.NORMAL:
+                tr.ever_labelled = True
+            label, pos = before[tid]
+            out.append(
+                Transition(
+                    t_ns=t_ns,
+                    target_id=tid,
+                    old=old,
+                    new=new,
+                    label=label,
+                    position_m=tr.mean_m,
+                    partner_id=partner_id,
+                    partner_label=before[partner_id][0] if partner_id in before else None,
+                )
+            )
+            tr.phase = new
+        for tid, new in plan.items():
+            if new is Phase.UNINITIALISED:
+                self._remove(tid)
+        return out
+
+    def _separate(self, a: _Track, b: _Track) -> None:
+        """Apply the angle rule (section 7.1): a and b take the modes it gives them."""
+        (mode_a, _), angle = lab.angle_rule(a.before_vec_m, a.mean_m, b.mean_m)
+        log.debug("t%d / t%d separate, angle %.0f deg", a.id, b.id, np.degrees(angle))
+        if mode_a == 1:  # swap the two modes (particle blocks and estimates)
+            ids = list(self._tracks)
+            ra = self._block_rows(np.array([ids.index(a.id)]))
+            rb = self._block_rows(np.array([ids.index(b.id)]))
+            self._states[ra], self._states[rb] = self._states[rb].copy(), self._states[ra].copy()
+            for attr in ("mean_m", "cov_m2", "vel_mps", "last_good_m"):
+                va, vb = getattr(a, attr), getattr(b, attr)
+                setattr(a, attr, vb)
+                setattr(b, attr, va)
+
+    def _reinit(self, tr: _Track, position_m: np.ndarray, velocity_mps: np.ndarray) -> None:
+        """Draw the tracker's particles around a position (new or re-acquired target)."""
+        fcfg = self.cfg.filter
+        n = fcfg.n_particles
+        idx = list(self._tracks).index(tr.id)
+        block = np.empty((n, sir.STATE_DIM))
+        block[:, :3] = position_m + self._rng.standard_normal((n, 3)) * fcfg.init_spread_m
+        block[:, 3:] = velocity_mps + self._rng.standard_normal((n, 3)) * fcfg.init_speed_std_mps
+        self._states[idx * n : (idx + 1) * n] = block
+        tr.mean_m = np.array(position_m, dtype=np.float64)
+        tr.last_good_m = tr.mean_m.copy()
+        tr.vel_mps = np.array(velocity_mps, dtype=np.float64)
+        tr.cov_m2 = np.eye(3) * fcfg.init_spread_m**2
+
+    def _remove(self, tid: int) -> None:
+        n = self.cfg.filter.n_particles
+        idx = list(self._tracks).index(tid)
+        self._states = np.delete(self._states, np.s_[idx * n : (idx + 1) * n], axis=0)
+        tr = self._tracks.pop(tid)
+        p = self._persons.get(tr.person)
+        if p is not None:
+            if p.head_id == tid:
+                p.head_id = None
+            if tid in p.hand_ids:
+                p.hand_ids.remove(tid)
+        log.debug("t%d (%s) retired", tid, tr.label)
+
+    # ------------------------------------------------------------------ 6: initialisation
+
+    def _initialise(
+        self, pts: np.ndarray, prior: np.ndarray, t_ns: int, dt_s: float, used: set[int]
+    ) -> list[Transition]:
+        """Start trackers at strong, unexplained candidates that persisted for
+        ``init_confirm_frames`` frame sets (one-frame ghosts never start one)."""
+        lc = self.cfg.lifecycle
+        free = [k for k in self._unexplained(pts, prior, lc.init_prior_min) if k not in used]
+        # also not within reach of a candidate that just re-acquired a lost tracker
+        if used and free:
+            taken = pts[sorted(used)]
+            free = [
+                k
+                for k in free
+                if np.linalg.norm(taken - pts[k], axis=1).min() > lc.explained_radius_m
+            ]
+        # non-maximum suppression: strongest first
+        kept: list[int] = []
+        for k in sorted(free, key=lambda k: (-prior[k], k)):
+            if all(np.linalg.norm(pts[k] - pts[j]) > lc.explained_radius_m for j in kept):
+                kept.append(k)
+        pending: list[_Pending] = []
+        taken_prev: set[int] = set()
+        out: list[Transition] = []
+        for k in kept:
+            best, best_d = -1, lc.init_gate_m
+            for i, pend in enumerate(self._pending):
+                d = float(np.linalg.norm(pts[k] - pend.position_m))
+                if i not in taken_prev and d <= best_d:
+                    best, best_d = i, d
+            if best >= 0:
+                taken_prev.add(best)
+                prev = self._pending[best]
+                vel = (pts[k] - prev.position_m) / dt_s if dt_s > 0 else np.zeros(3)
+                pend = _Pending(pts[k].copy(), prev.count + 1, vel)
+            else:
+                pend = _Pending(pts[k].copy(), 1, np.zeros(3))
+            n_live = len(self._tracks)
+            ev = Evidence(confirmed=pend.count >= lc.init_confirm_frames)
+            if next_phase(Phase.UNINITIALISED, ev, lc) is Phase.UNLABELLED and (
+                n_live < lc.max_trackers
+            ):
+                out.append(self._spawn(pend, t_ns))
+            else:
+                pending.append(pend)
+        self._pending = pending
+        return out
+
+    def _spawn(self, pend: _Pending, t_ns: int) -> Transition:
+        tid = self._next_id
+        self._next_id += 1
+        n = self.cfg.filter.n_particles
+        tr = _Track(
+            id=tid,
+            phase=Phase.UNLABELLED,
+            born_ns=t_ns,
+            mean_m=pend.position_m.copy(),
+            cov_m2=np.zeros((3, 3)),
+            vel_mps=np.zeros(3),
+            last_good_m=pend.position_m.copy(),
+        )
+        self._tracks[tid] = tr
+        self._states = np.concatenate([self._states, np.zeros((n, sir.STATE_DIM))])
+        speed = np.linalg.norm(pend.velocity_mps)
+        vel = pend.velocity_mps * min(1.0, self.cfg.filter.max_speed_mps / speed) if speed else 0
+        self._reinit(tr, pend.position_m, np.zeros(3) + vel)
+        log.debug("t%d started at %s", tid, np.round(pend.position_m, 3))
+        return Transition(
+            t_ns=t_ns,
+            target_id=tid,
+            old=Phase.UNINITIALISED,
+            new=Phase.UNLABELLED,
+            label=tr.label,
+            position_m=tr.mean_m,
+        )
+
+    # ------------------------------------------------------------------ output
+
+    def _frame(self, t_ns: int, transitions: list[Transition]) -> TrackFrame:
+        n = self.cfg.filter.n_particles
+        targets = []
+        blocks, owners = [], []
+        for idx, (tid, tr) in enumerate(self._tracks.items()):
+            mean = tr.last_good_m if tr.phase is Phase.LOST else tr.mean_m
+            targets.append(
+                TargetSnapshot(
+                    target_id=tid,
+                    person=tr.person,
+                    limb=tr.limb,
+                    phase=tr.phase,
+                    mean_m=mean.copy(),
+                    cov_m2=tr.cov_m2.copy(),
+                )
+            )
+            if tr.phase in ACTIVE:
+                blocks.append(idx)
+                owners.append(tid)
+        rows = self._block_rows(np.array(blocks, dtype=np.intp))
+        particles = self._states[rows, :3].astype(np.float32)
+        owner = np.repeat(np.array(owners, dtype=np.int32), n)
+        particles.flags.writeable = False
+        owner.flags.writeable = False
+        return TrackFrame(
+            t_ns=t_ns,
+            targets=tuple(sorted(targets, key=lambda s: s.target_id)),
+            transitions=tuple(transitions),
+            particles_m=particles,
+            particle_owner=owner,
+        )
+
+    # ------------------------------------------------------------------ introspection
+
+    @property
+    def n_live(self) -> int:
+        """Number of trackers that are not uninitialised."""
+        return len(self._tracks)
+
+    def person_facing(self, person: int) -> np.ndarray | None:
+        """(2,) accumulated facing evidence of person ``person`` (None if unknown)."""
+        p = self._persons.get(person)
+        return None if p is None else p.facing_ev.copy()

@@ -1,0 +1,209 @@
+"""Settings of the multi-target 3-D tracking stage (paper 004 sections 4, 5, 5.2, 7.1).
+
+Three groups, nested in :class:`TrackingConfig` (TOML table ``[tracking]`` with sub-tables
+``filter``, ``lifecycle`` and ``labelling``):
+
+- :class:`FilterConfig` -- the per-target SIR filters: particle count, motion noise, the width
+  of the candidate likelihood (eq. 17);
+- :class:`LifecycleConfig` -- the finite state machine of Fig. 1: initialisation, combining,
+  separating, losing and retiring trackers;
+- :class:`LabellingConfig` -- head / hand typing, person grouping, left / right.
+
+Defaults were chosen for 15 fps input and people standing or walking in a room, and checked
+with ``benchmarks/tracking_bench.py`` on the synthetic recordings (docs/benchmarks.md).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from surveil.config import setting
+
+
+@dataclass(frozen=True, slots=True)
+class FilterConfig:
+    """One SIR filter per target: constant-velocity prediction, eq. 17 likelihood."""
+
+    n_particles: int = setting(200, "particles per target", min=10, max=100_000)
+    accel_std_hand_mps2: float = setting(
+        25.0, "acceleration noise of hands and untyped targets (fast, abrupt), m/s^2", min=0.0
+    )
+    accel_std_head_mps2: float = setting(
+        4.0, "acceleration noise of heads (slow, smooth), m/s^2", min=0.0
+    )
+    position_jitter_m: float = setting(
+        0.005, "extra random-walk position noise per step (keeps diversity), m", min=0.0
+    )
+    max_speed_mps: float = setting(
+        4.0, "particle speeds are clipped to this (hands move up to ~3 m/s), m/s", min=0.1
+    )
+    max_dt_s: float = setting(
+        0.5, "a longer gap between frame sets is predicted as this long, s", min=0.001
+    )
+    sigma_m: float = setting(
+        0.04, "sigma of N(x; Z_c, sigma^2) in the likelihood (eq. 17), m", min=1e-4
+    )
+    clutter_level: float = setting(
+        1e-3,
+        "constant added to the unnormalised likelihood (no candidate = flat weights), unitless",
+        min=0.0,
+    )
+    init_spread_m: float = setting(
+        0.02, "std of the particle cloud drawn around a new or re-acquired target, m", min=0.0
+    )
+    init_speed_std_mps: float = setting(
+        0.3, "std of the initial particle velocities, m/s", min=0.0
+    )
+
+
+@dataclass(frozen=True, slots=True)
+class LifecycleConfig:
+    """The tracker state machine (paper 004 section 5.2, Fig. 1)."""
+
+    init_prior_min: float = setting(
+        0.3, "only candidates with a prior p(Z) at least this start a tracker", min=0.0, max=1.0
+    )
+    init_confirm_frames: int = setting(
+        2, "consecutive frame sets an unexplained candidate must persist to start one", min=1
+    )
+    init_gate_m: float = setting(
+        0.12, "a candidate continues a pending one of the previous set within this, m", min=0.0
+    )
+    explained_radius_m: float = setting(
+        0.15, "a candidate this close to a live tracker's estimate is explained by it, m", min=0.0
+    )
+    max_trackers: int = setting(24, "no new tracker starts while this many are live", min=1)
+    combine_distance_m: float = setting(
+        0.10, "two trackers whose estimates come closer than this combine, m", min=0.0
+    )
+    separate_distance_m: float = setting(
+        0.20,
+        "a combined pair separates when its two modes are farther apart than this, m",
+        min=0.0,
+    )
+    separate_frames: int = setting(
+        2, "consecutive frame sets the modes must stay apart before separating", min=1
+    )
+    lost_level: float = setting(
+        0.02,
+        "a tracker whose mean particle support sum_c exp(-d^2/2s^2) p(Z_c) stays below this "
+        "is unsupported, unitless",
+        min=0.0,
+    )
+    lost_frames: int = setting(
+        3, "consecutive unsupported frame sets before a tracker is lost", min=1
+    )
+    reacquire_gate_m: float = setting(
+        0.25,
+        "a lost target is re-acquired by a candidate within this of its last position, m",
+        min=0.0,
+    )
+    reacquire_speed_mps: float = setting(
+        0.5, "the re-acquisition gate grows by this per second lost, m/s", min=0.0
+    )
+    reacquire_max_m: float = setting(0.8, "the re-acquisition gate never exceeds this, m", min=0.0)
+    reacquire_prior_min: float = setting(
+        0.2,
+        "only candidates with a prior at least this re-acquire a lost target",
+        min=0.0,
+        max=1.0,
+    )
+    retire_s: float = setting(
+        3.0, "a labelled tracker lost for this long is retired (removed), s", min=0.0
+    )
+    retire_unlabelled_s: float = setting(
+        0.6, "a never-labelled tracker lost for this long is retired, s", min=0.0
+    )
+
+
+@dataclass(frozen=True, slots=True)
+class LabellingConfig:
+    """Head / hand typing, person grouping, left / right (paper 004 sections 5.2 and 7.1)."""
+
+    head_z_mid_m: float = setting(
+        1.3, "height above the floor where the height cue is neutral, m", min=0.0
+    )
+    head_z_scale_m: float = setting(
+        0.1, "height change that moves the height cue by one log-odds unit, m", min=1e-3
+    )
+    cue_clip: float = setting(3.0, "every cue's log-odds is clipped to +-this", min=0.1)
+    below_radius_m: float = setting(
+        0.45, "horizontal radius in which another target above means 'I am a hand', m", min=0.0
+    )
+    below_dz_min_m: float = setting(
+        0.2,
+        "another target this much higher (and not more than below_dz_max_m) is above, m",
+        min=0.0,
+    )
+    below_dz_max_m: float = setting(1.2, "see below_dz_min_m, m", min=0.0)
+    below_llr: float = setting(
+        3.0, "log-odds against 'head' when another target is right above", min=0.0
+    )
+    rel_v_mid: float = setting(
+        0.15, "relative silhouette height where the silhouette cue is neutral, unitless"
+    )
+    rel_v_scale: float = setting(
+        0.04, "rel_v change that moves the silhouette cue by one log-odds unit", min=1e-4
+    )
+    hand_speed_mps: float = setting(
+        0.8, "a target faster than this (smoothed) gets speed_llr against 'head', m/s", min=0.0
+    )
+    speed_llr: float = setting(1.5, "log-odds against 'head' of a fast target", min=0.0)
+    evidence_alpha: float = setting(
+        0.3, "weight of the newest frame in the smoothed type evidence", min=0.01, max=1.0
+    )
+    decide_llr: float = setting(
+        1.5, "smoothed log-odds needed to type a target as head (>= +) or hand (<= -)", min=0.0
+    )
+    min_frames: int = setting(3, "frame sets a tracker is observed before it is typed", min=1)
+    arm_reach_m: float = setting(
+        0.95, "a hand belongs to a head at most this far away (3-D), m", min=0.0
+    )
+    person_margin_m: float = setting(
+        0.15,
+        "the nearest head must be this much closer than the second to claim a hand, m",
+        min=0.0,
+    )
+    duplicate_head_m: float = setting(
+        0.3,
+        "a head-like target this close (horizontally) to a known head is not a head, m",
+        min=0.0,
+    )
+    facing_decay: float = setting(
+        0.97, "per-frame decay of the accumulated facing evidence", min=0.0, max=1.0
+    )
+    facing_min: float = setting(
+        0.5, "facing evidence needed before left / right are decided", min=0.0
+    )
+    lr_max_wait_s: float = setting(
+        1.5, "decide left / right by the best guess after this long anyway, s", min=0.0
+    )
+    lr_margin_m: float = setting(
+        0.04,
+        "a lone hand must be this far left or right of the head to be decided early, m",
+        min=0.0,
+    )
+    walk_speed_mps: float = setting(
+        0.3, "head speed above which the walking direction is facing evidence, m/s", min=0.0
+    )
+    social_weight: float = setting(
+        0.05, "facing evidence per frame towards the nearest other person's head", min=0.0
+    )
+    social_range_m: float = setting(
+        2.5, "another person within this range draws the facing evidence, m", min=0.0
+    )
+
+
+@dataclass(frozen=True, slots=True)
+class TrackingConfig:
+    """All settings of the tracking stage (``[tracking]`` with sub-tables)."""
+
+    filter: FilterConfig = setting(
+        default_factory=FilterConfig, doc="per-target SIR filters (eq. 9-17)"
+    )
+    lifecycle: LifecycleConfig = setting(
+        default_factory=LifecycleConfig, doc="tracker state machine (Fig. 1)"
+    )
+    labelling: LabellingConfig = setting(
+        default_factory=LabellingConfig, doc="head / hand, person, left / right labels"
+    )
