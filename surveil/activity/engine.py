@@ -5,8 +5,9 @@ Two kinds of episode, one per (rule, limbs) pair:
 *Coincidence episodes* (hand/hand, hand/head rules). Opened at the **climax**: the two
 trackers enter the combined state together (a ``Transition`` with ``new is COMBINED``), or their
 estimates come closer than the rule's ``coincidence_m`` (so hand/head contacts count even when
-the tracker keeps them apart). The limbs' labels from before the join and the carry estimates
-at the climax ("before"; the carry stage freezes estimates while hands overlap) are kept. The
+the tracker keeps them apart; if the tracker combines them later, its join becomes the climax).
+The limbs' labels from before the join and the carry estimates at the first contact ("before";
+the carry stage freezes estimates while hands overlap) are kept. The
 episode is separated by the combined -> unlabelled transition (or, if it never combined, when
 the distance exceeds ``coincidence_m`` again). The **post-separation point** is
 ``separation_delay_s`` after the two targets are ``separation_m`` apart, or
@@ -343,6 +344,9 @@ class ActivityEngine:
                 for rule in self._pair_rules:
                     ep = self._pairs.get((rule.name, frozenset(ids)))
                     if ep is not None:
+                        if not ep.combined and ep.separated_ns is None:
+                            # opened by proximity: the tracker's join is the climax (§7.1)
+                            ep.climax_ns = cur.t_ns
                         ep.combined = True
                         continue
                     labels = (tr.label, partner_label)

@@ -1,0 +1,378 @@
+"""ActivityEngine on constructed tracker/carry streams: each row of paper 004 Table 1, the
+negative cases, a user rule, timeouts, determinism, frame-rate independence, bounded memory."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from activity_streams import (
+    Join,
+    S,
+    Script,
+    Track,
+    empty,
+    hand,
+    head,
+    holding,
+    keyframes,
+    run,
+    still,
+    switch,
+)
+
+from surveil.activity.engine import ActivityEngine
+from surveil.activity.rules import load_rules
+from surveil.datatypes import Limb, TrackFrame
+
+GREEN, BLUE = 120.0, 215.0
+L, R = Limb.LEFT_HAND, Limb.RIGHT_HAND
+
+# two people facing each other along x; hands at rest beside the hips
+P1_LEFT_REST, P1_RIGHT_REST = (0.05, 0.2, 0.9), (0.05, -0.2, 0.9)
+P2_LEFT_REST, P2_RIGHT_REST = (1.15, -0.2, 0.9), (1.15, 0.2, 0.9)
+
+
+@pytest.fixture(scope="module")
+def rules():
+    return load_rules()
+
+
+def meet(rest, point, t_go=0.5, t_meet=1.0, t_leave=1.5, t_back=2.0):
+    return keyframes((t_go, rest), (t_meet, point), (t_leave, point), (t_back, rest))
+
+
+def two_people(hand1_carry=None, hand2_carry=None, *, join=True, gap=0.06, swap=False):
+    """p1's right hand (3) meets p2's right hand (6) at x = 0.6 from 1.0 s to 1.5 s."""
+    tracks = [
+        head(1, 1, 0.0),
+        hand(2, 1, L, still(*P1_LEFT_REST)),
+        hand(3, 1, R, meet(P1_RIGHT_REST, (0.6 - gap / 2, 0, 1.05)), hand1_carry),
+        head(4, 2, 1.2),
+        hand(5, 2, L, still(*P2_LEFT_REST)),
+        hand(6, 2, R, meet(P2_RIGHT_REST, (0.6 + gap / 2, 0, 1.05)), hand2_carry),
+    ]
+    joins = [Join(3, 6, 1.0, 1.5, swap=swap)] if join else []
+    return Script(tracks, joins)
+
+
+def one_person(left_carry=None, right_carry=None, *, join=True):
+    """p1's hands meet in front of the chest from 1.0 s to 1.3 s."""
+    tracks = [
+        head(1, 1, 0.0),
+        hand(2, 1, L, meet(P1_LEFT_REST, (0.3, 0.02, 1.2), t_leave=1.3), left_carry),
+        hand(3, 1, R, meet(P1_RIGHT_REST, (0.3, -0.02, 1.2), t_leave=1.3), right_carry),
+    ]
+    return Script(tracks, [Join(2, 3, 1.0, 1.3)] if join else [])
+
+
+def reach(carry, *, point=(0.6, -0.2, 0.95)):
+    """p1's right hand reaches to a table point (arrives 1.1 s), stays 0.5 s, returns."""
+    path = keyframes((0.5, P1_RIGHT_REST), (1.1, point), (1.6, point), (2.2, (0.25, -0.15, 1.0)))
+    return Script(
+        [head(1, 1, 0.0), hand(2, 1, L, still(*P1_LEFT_REST)), hand(3, 1, R, path, carry)]
+    )
+
+
+def only(events, activity):
+    found = [e for e in events if e.activity == activity]
+    assert len(found) == 1, f"expected one {activity}, got {events}"
+    return found[0]
+
+
+# ---- Table 1 ---------------------------------------------------------------------------------
+
+
+def test_handshake_two_people_no_objects(rules):
+    events = run(rules, two_people().stream())
+    assert [e.activity for e in events] == ["handshake"]
+    ev = events[0]
+    assert ev.actors == ("p1/right_hand", "p2/right_hand")
+    assert ev.persons == ("p1", "p2")
+    assert ev.climax_ns == 1 * S
+    assert ev.start_ns < ev.climax_ns < ev.end_ns
+    assert 1.5 * S < ev.end_ns < 2.5 * S
+    assert ev.rule == "default.toml:handshake"
+    assert ev.object_hue_deg is None and ev.from_actor is None
+    assert ev.confidence == pytest.approx(0.9)
+
+
+def test_clap_one_person_no_objects(rules):
+    events = run(rules, one_person().stream())
+    assert [e.activity for e in events] == ["clap"]
+    assert events[0].actors == ("p1/left_hand", "p1/right_hand")
+    assert events[0].persons == ("p1",)
+    assert events[0].climax_ns == 1 * S
+
+
+@pytest.mark.parametrize("giver", ["p1", "p2"])
+def test_exchange_between_two_people_either_direction(rules, giver):
+    gives = switch(1.2, holding(GREEN), empty())
+    takes = switch(1.2, empty(), holding(GREEN))
+    script = two_people(gives, takes) if giver == "p1" else two_people(takes, gives)
+    events = run(rules, script.stream())
+    assert [e.activity for e in events] == ["exchange"]
+    ev = events[0]
+    src, dst = ("p1/right_hand", "p2/right_hand")[:: 1 if giver == "p1" else -1]
+    assert (ev.from_actor, ev.to_actor) == (src, dst)
+    assert ev.actors == (src, dst)
+    assert ev.object_hue_deg == pytest.approx(GREEN)
+    assert ev.persons == tuple(sorted({src[:2], dst[:2]}, key=lambda p: p != src[:2]))
+
+
+def test_self_exchange_between_own_hands(rules):
+    events = run(
+        rules,
+        one_person(
+            left_carry=switch(1.1, holding(BLUE), empty()),
+            right_carry=switch(1.1, empty(), holding(BLUE)),
+        ).stream(),
+    )
+    ev = only(events, "exchange")
+    assert len(events) == 1
+    assert (ev.from_actor, ev.to_actor) == ("p1/left_hand", "p1/right_hand")
+    assert ev.persons == ("p1",)
+
+
+def test_exchange_survives_crossed_tracker_identities(rules):
+    """After the separation tracker 3 follows p2's hand (and is relabelled so): the engine
+    matches labels, not tracker ids."""
+    gives = switch(1.2, holding(GREEN), empty())
+    takes = switch(1.2, empty(), holding(GREEN))
+    script = two_people(gives, takes, swap=True)
+    script.joins[0].relabel_s = 0.0  # relabelled at once, before the post-separation point
+    events = run(rules, script.stream())
+    assert [e.activity for e in events] == ["exchange"]
+    assert (events[0].from_actor, events[0].to_actor) == ("p1/right_hand", "p2/right_hand")
+
+
+def test_pick_reach_stop_return_gains_object(rules):
+    events = run(rules, reach(switch(1.35, empty(), holding(BLUE))).stream())
+    ev = only(events, "pick")
+    assert len(events) == 1
+    assert ev.actors == ("p1/right_hand",) and ev.persons == ("p1",)
+    assert abs(ev.climax_ns - 1.1 * S) <= 0.1 * S  # the hand stops at 1.1 s
+    assert ev.start_ns < 1.0 * S and 1.6 * S < ev.end_ns < 2.6 * S
+    assert ev.object_hue_deg == pytest.approx(BLUE)
+
+
+def test_place_reach_stop_return_leaves_object(rules):
+    events = run(rules, reach(switch(1.35, holding(BLUE), empty())).stream())
+    ev = only(events, "place")
+    assert len(events) == 1
+    assert ev.object_hue_deg == pytest.approx(BLUE)
+    assert abs(ev.climax_ns - 1.1 * S) <= 0.1 * S
+
+
+# ---- negatives -------------------------------------------------------------------------------
+
+
+def test_approach_without_coincidence_is_no_event(rules):
+    """Hands stop 0.2 m apart (beyond coincidence_m) and the tracker never combines them."""
+    assert run(rules, two_people(join=False, gap=0.2).stream()) == []
+
+
+def test_proximity_counts_as_coincidence_without_tracker_join(rules):
+    """Hands 0.06 m apart are a coincidence even if the tracker kept two trackers."""
+    events = run(rules, two_people(join=False, gap=0.06).stream())
+    assert [e.activity for e in events] == ["handshake"]
+
+
+def test_coincidence_without_carry_change_is_not_an_exchange(rules):
+    """p1 keeps its object: not an exchange (Table 1 needs 1,0 -> 0,1) nor a handshake
+    (needs 0,0 -> 0,0)."""
+    assert run(rules, two_people(holding(GREEN), empty()).stream()) == []
+
+
+def test_low_confidence_carry_is_unknown(rules):
+    gives = switch(1.2, holding(GREEN, conf=0.1), empty())
+    takes = switch(1.2, empty(), holding(GREEN, conf=0.1))
+    assert run(rules, two_people(gives, takes).stream()) == []
+
+
+def test_exchange_needs_the_same_object(rules):
+    """The giver held green, the taker holds blue afterwards: not the same object."""
+    gives = switch(1.2, holding(GREEN), empty())
+    takes = switch(1.2, empty(), holding(BLUE))
+    assert run(rules, two_people(gives, takes).stream()) == []
+
+
+def test_reach_without_carry_change_is_no_event(rules):
+    assert run(rules, reach(empty()).stream()) == []
+
+
+def test_hand_resting_at_the_body_is_not_a_pick(rules):
+    """A still hand near the body (no reach, not away from the head) opens nothing."""
+    script = Script(
+        [head(1, 1, 0.0), hand(3, 1, R, still(*P1_RIGHT_REST), switch(1.0, empty(), holding(1)))]
+    )
+    assert run(rules, script.stream()) == []
+
+
+# ---- user rule -------------------------------------------------------------------------------
+
+TOUCH_FACE = """
+[rule.touch_face]
+description = "a hand touches the head of the same person"
+limbs = ["hand", "head"]
+persons = "same"
+coincidence_m = 0.2
+separation_m = 0.3
+"""
+
+
+def face_touch(join: bool) -> Script:
+    face = (0.12, -0.03, 1.6)  # 0.13 m from the head centre
+    path = keyframes((0.5, P1_RIGHT_REST), (1.0, face), (1.5, face), (2.0, P1_RIGHT_REST))
+    tracks = [head(1, 1, 0.0), hand(2, 1, L, still(*P1_LEFT_REST)), hand(3, 1, R, path)]
+    return Script(tracks, [Join(3, 1, 1.0, 1.5)] if join else [])
+
+
+@pytest.mark.parametrize("join", [False, True], ids=["proximity", "tracker-join"])
+def test_user_touch_face_rule_fires(tmp_path: Path, join: bool):
+    user = tmp_path / "mine.toml"
+    user.write_text(TOUCH_FACE)
+    rules = load_rules([user])
+    events = run(rules, face_touch(join).stream())
+    assert [e.activity for e in events] == ["touch_face"]
+    ev = events[0]
+    assert ev.actors == ("p1/right_hand", "p1/head")
+    assert ev.rule == "mine.toml:touch_face"
+    assert abs(ev.climax_ns - 1.0 * S) <= 0.15 * S
+    assert ev.confidence == 1.0  # no carry state involved
+
+
+def test_user_rule_alongside_defaults_does_not_disturb_them(tmp_path: Path, rules):
+    user = tmp_path / "mine.toml"
+    user.write_text(TOUCH_FACE)
+    both = load_rules([Path(rules.sources[0]), user])
+    assert run(both, face_touch(False).stream())[0].activity == "touch_face"
+    assert [e.activity for e in run(both, one_person().stream())] == ["clap"]
+
+
+def test_disabled_rule_never_fires(tmp_path: Path):
+    user = tmp_path / "off.toml"
+    user.write_text(TOUCH_FACE + "enabled = false\n")
+    assert run(load_rules([user]), face_touch(False).stream()) == []
+
+
+# ---- timing, decisions, determinism, memory ---------------------------------------------------
+
+
+def test_event_emitted_online_at_the_post_separation_point(rules):
+    engine = ActivityEngine(rules)
+    decided_at = []
+    for frame, carry in two_people().stream():
+        for ev in engine.step(frame, carry):
+            decided_at.append((frame.t_ns, ev))
+    assert len(decided_at) == 1
+    t_ns, ev = decided_at[0]
+    assert t_ns == ev.end_ns
+    assert engine.finish() == []
+
+
+def test_timeout_when_targets_do_not_move_apart(rules):
+    """Separated but the hands stay 0.1 m apart: decided at separation_timeout_s, with the
+    confidence scaled by timeout_confidence_factor."""
+    tracks = [
+        head(1, 1, 0.0),
+        hand(2, 1, L, still(0.3, 0.05, 1.2)),
+        hand(3, 1, R, still(0.3, -0.05, 1.2)),
+    ]
+    script = Script(tracks, [Join(2, 3, 1.0, 1.3)], duration_s=4.0)
+    events = run(rules, script.stream())
+    assert [e.activity for e in events] == ["clap"]
+    assert events[0].end_ns == pytest.approx(3.3 * S, abs=0.07 * S)
+    assert events[0].confidence == pytest.approx(0.45)
+
+
+def test_finish_decides_a_pending_separation(rules):
+    script = one_person()
+    script.duration_s = 1.4  # ends 0.1 s after the separation
+    engine = ActivityEngine(rules)
+    online = [ev for frame, carry in script.stream() for ev in engine.step(frame, carry)]
+    assert online == []
+    final = engine.finish()
+    assert [e.activity for e in final] == ["clap"]
+    assert final[0].confidence == pytest.approx(0.45)
+
+
+def test_coincidence_without_separation_is_dropped(rules):
+    script = one_person()
+    script.joins[0].t_sep_s = 99.0
+    assert run(rules, script.stream()) == []
+
+
+def test_deterministic(rules):
+    script = two_people(switch(1.2, holding(GREEN), empty()), switch(1.2, empty(), holding(GREEN)))
+    assert run(rules, script.stream()) == run(rules, script.stream())
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda: two_people(),
+        lambda: one_person(),
+        lambda: reach(switch(1.35, empty(), holding(BLUE))),
+    ],
+    ids=["handshake", "clap", "pick"],
+)
+def test_same_events_at_any_frame_rate(rules, make):
+    by_fps = {fps: run(rules, make().stream(fps)) for fps in (10.0, 15.0, 30.0)}
+    kinds = {fps: [(e.activity, e.actors) for e in evs] for fps, evs in by_fps.items()}
+    assert kinds[10.0] == kinds[15.0] == kinds[30.0] and kinds[10.0]
+    climaxes = [evs[0].climax_ns for evs in by_fps.values()]
+    assert max(climaxes) - min(climaxes) <= 0.1 * S
+
+
+def test_memory_stays_bounded_over_a_long_stream(rules):
+    """Ten claps in a row: every one is reported, and history and episodes do not grow."""
+    engine = ActivityEngine(rules)
+    fps, n_events, max_frames = 30.0, 0, 0
+    for k in range(10):
+        for frame, carry in one_person().stream(fps):
+            shifted = TrackFrame(
+                frame.t_ns + k * 4 * S,
+                frame.targets,
+                tuple(
+                    type(tr)(
+                        tr.t_ns + k * 4 * S,
+                        tr.target_id,
+                        tr.old,
+                        tr.new,
+                        tr.label,
+                        tr.position_m,
+                        tr.partner_id,
+                        tr.partner_label,
+                    )
+                    for tr in frame.transitions
+                ),
+            )
+            n_events += len(engine.step(shifted, carry))
+            max_frames = max(max_frames, len(engine._frames))
+    assert n_events == 10
+    assert max_frames <= (2.0 + 0.3 + 0.5) * fps + 2
+    assert not engine._pairs and not engine._stills
+
+
+def test_time_must_not_go_backwards(rules):
+    engine = ActivityEngine(rules)
+    engine.step(TrackFrame(2 * S, ()), {})
+    with pytest.raises(ValueError, match="t_ns"):
+        engine.step(TrackFrame(1 * S, ()), {})
+
+
+def test_unlabelled_trackers_match_no_rule(rules):
+    """Two trackers never labelled (t2, t3) coincide: limb kinds unknown, no event."""
+    tracks = [
+        Track(2, 0, Limb.UNKNOWN, meet(P1_LEFT_REST, (0.3, 0.02, 1.2)), empty()),
+        Track(3, 0, Limb.UNKNOWN, meet(P1_RIGHT_REST, (0.3, -0.02, 1.2)), empty()),
+    ]
+    assert run(rules, Script(tracks, [Join(2, 3, 1.0, 1.5)]).stream()) == []
+
+
+def test_carry_keys_may_be_numpy_ints(rules):
+    frame, carry = two_people().stream()[0]
+    engine = ActivityEngine(rules)
+    assert engine.step(frame, {np.int64(k): v for k, v in carry.items()}) == []
