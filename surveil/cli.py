@@ -1,6 +1,6 @@
 """Command-line interface: the only place where exceptions become messages and exit codes.
 
-Subcommands: ``demo``, ``synth``, ``info``, ``eval``, ``truth``, ``rig``.
+Subcommands: ``demo``, ``synth``, ``info``, ``eval``, ``truth``, ``rig``, ``review``.
 """
 
 from __future__ import annotations
@@ -163,6 +163,39 @@ def cmd_rig_export(args: argparse.Namespace) -> ExitCode:
     return ExitCode.OK
 
 
+def cmd_review(args: argparse.Namespace) -> ExitCode:
+    from surveil.viz import viewer
+    from surveil.viz.review import build_review
+
+    out = args.out or args.mcap.with_suffix(".rrd")
+    build_review(
+        args.mcap,
+        out,
+        recording=args.recording,
+        jpeg_quality=args.jpeg_quality,
+        image_scale=args.image_scale,
+        observations=not args.no_blobs,
+        on_progress=progress_bar(f"review {args.mcap.name}", args.quiet),
+    )
+    print(f"wrote {out} ({out.stat().st_size / 1e6:.1f} MB)")
+    try:
+        if args.screenshot is not None:
+            viewer.screenshot(out, args.screenshot, at_s=args.at)
+            print(f"wrote {args.screenshot}")
+        if args.web:
+            print(f"serving the web viewer at http://127.0.0.1:{args.web_port} (Ctrl-C stops)")
+            viewer.serve_web(out, port=args.web_port)
+        elif not args.save and args.screenshot is None:
+            if viewer.display_available():
+                viewer.open_viewer(out)
+            else:
+                print(f"no display: open it elsewhere with `rerun {out}`, or use --web")
+    except viewer.ViewerError as exc:
+        log.error("%s", exc)
+        return ExitCode.FAILURE
+    return ExitCode.OK
+
+
 # ---------------------------------------------------------------------------------------------
 
 
@@ -246,6 +279,45 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("recording", type=Path)
     p.add_argument("--out", type=Path, required=True)
     p.set_defaults(command=cmd_truth)
+
+    p = sub.add_parser(
+        "review", help="a Rerun review recording (.rrd) of an output MCAP, and open it"
+    )
+    p.add_argument("mcap", type=Path, help="output MCAP of `surveil run` (or `surveil truth`)")
+    p.add_argument(
+        "--recording",
+        type=Path,
+        default=None,
+        help="the recording the MCAP was made from (default: the one named in the MCAP)",
+    )
+    p.add_argument("--out", type=Path, default=None, help="the .rrd to write [MCAP.rrd]")
+    how = p.add_mutually_exclusive_group()
+    how.add_argument("--save", action="store_true", help="only write the .rrd")
+    how.add_argument("--web", action="store_true", help="serve the web viewer")
+    p.add_argument("--web-port", type=int, default=9090, help="web viewer port [9090]")
+    p.add_argument(
+        "--screenshot",
+        type=Path,
+        default=None,
+        metavar="PNG",
+        help="render the layout headlessly into this image (needs a Vulkan driver)",
+    )
+    p.add_argument(
+        "--at", type=float, default=None, metavar="SECONDS", help="screenshot time [the end]"
+    )
+    p.add_argument("--jpeg-quality", type=int, default=70, help="camera frame quality [70]")
+    p.add_argument(
+        "--image-scale",
+        type=float,
+        default=1.0,
+        help="scale of the stored camera frames, (0, 1] [1]; 0.5 makes the file ~3x smaller",
+    )
+    p.add_argument(
+        "--no-blobs",
+        action="store_true",
+        help="do not recompute silhouettes and skin blobs (faster)",
+    )
+    p.set_defaults(command=cmd_review)
 
     p = sub.add_parser("rig", help="import, export calibration rigs")
     rig_sub = p.add_subparsers(dest="rig_command", required=True, metavar="ACTION")
