@@ -1,6 +1,7 @@
 """Command-line interface: the only place where exceptions become messages and exit codes.
 
-Subcommands: ``demo``, ``synth``, ``info``, ``eval``, ``truth``, ``rig``, ``review``.
+Subcommands: ``demo``, ``synth``, ``info``, ``eval``, ``truth``, ``rig``, ``review``,
+``rules-check``, ``events``.
 """
 
 from __future__ import annotations
@@ -160,6 +161,38 @@ def cmd_rig_export(args: argparse.Namespace) -> ExitCode:
     rig = load_rig(args.rig)
     export_aniposelib(rig, args.out)
     print(f"wrote {args.out} (aniposelib TOML, metres)")
+    return ExitCode.OK
+
+
+def cmd_rules_check(args: argparse.Namespace) -> ExitCode:
+    from surveil.activity.rules import load_rules
+
+    rules = load_rules(args.files or None)
+    if args.json:
+        for rule in rules:
+            print(json.dumps(rule.to_table()))
+        return ExitCode.OK
+    for rule in rules:
+        print(rule.describe())
+    print(f"{len(rules)} rules OK ({', '.join(rules.sources)})")
+    return ExitCode.OK
+
+
+def cmd_events(args: argparse.Namespace) -> ExitCode:
+    from surveil.activity.timeline import event_json, format_event_table
+    from surveil.io.mcap_reader import read_run
+    from surveil.io.mcap_writer import hue_name
+
+    run = read_run(args.mcap)
+    if args.json:
+        for ev in run.events:
+            print(event_json(ev, hue_name))
+    elif run.events:
+        print(format_event_table(run.events, hue_name))
+    else:
+        print(f"{args.mcap}: no events")
+    if not run.complete:
+        log.warning("%s is truncated: events up to its last complete chunk", args.mcap)
     return ExitCode.OK
 
 
@@ -347,6 +380,18 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("rig", type=Path)
     q.add_argument("--out", type=Path, required=True)
     q.set_defaults(command=cmd_rig_export)
+
+    p = sub.add_parser("rules-check", help="validate activity rule files and list their rules")
+    p.add_argument(
+        "files", type=Path, nargs="*", help="rule TOML files (default: the default rules)"
+    )
+    p.add_argument("--json", action="store_true", help="one JSON object per rule")
+    p.set_defaults(command=cmd_rules_check)
+
+    p = sub.add_parser("events", help="print the event timeline of an output MCAP")
+    p.add_argument("mcap", type=Path, help="output MCAP of `surveil run`")
+    p.add_argument("--json", action="store_true", help="JSON lines instead of a table")
+    p.set_defaults(command=cmd_events)
     return parser
 
 
