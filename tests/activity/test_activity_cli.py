@@ -1,0 +1,112 @@
+"""``surveil rules-check`` and ``surveil events``, run in-process through ``cli.main``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from surveil.camera import Rig, look_at
+from surveil.cli import ExitCode, main
+from surveil.datatypes import ActivityEvent
+from surveil.io.mcap_writer import McapWriter
+
+S = 1_000_000_000
+REPO = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture
+def rig() -> Rig:
+    cam = look_at(
+        "cam0", np.array([3.0, -3, 2.5]), np.array([0.0, 0, 1]), width=64, height=48, hfov_deg=70
+    )
+    return Rig((cam,))
+
+
+EXCHANGE = ActivityEvent(
+    "exchange",
+    12 * S,
+    int(12.4 * S),
+    13 * S,
+    ("p1/right_hand", "p2/left_hand"),
+    ("p1", "p2"),
+    "default.toml:exchange",
+    0.91,
+    120.0,
+    "p1/right_hand",
+    "p2/left_hand",
+)
+CLAP = ActivityEvent(
+    "clap", 2 * S, int(2.5 * S), 3 * S, ("p1/left_hand", "p1/right_hand"), ("p1",), "x:clap", 0.8
+)
+
+
+def write_run(path: Path, rig: Rig, events: list[ActivityEvent]) -> Path:
+    with McapWriter(path, rig, start_time_ns=1_700_000_000 * S) as w:
+        for ev in events:
+            w.write_event(ev)
+    return path
+
+
+def test_rules_check_lists_default_rules(capsys):
+    assert main(["rules-check"]) == ExitCode.OK
+    out = capsys.readouterr().out
+    for name in ("clap", "handshake", "exchange", "pick", "place"):
+        assert f"default.toml:{name}:" in out
+    assert "5 rules OK" in out
+
+
+def test_rules_check_several_files_as_json(capsys):
+    files = [REPO / "rules" / "default.toml", REPO / "rules" / "examples" / "touch_face.toml"]
+    assert main(["rules-check", "--json", *map(str, files)]) == ExitCode.OK
+    rows = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert [r["name"] for r in rows][-1] == "touch_face"
+    assert rows[-1]["limbs"] == ["hand", "head"] and rows[-1]["coincidence_m"] == 0.2
+
+
+def test_rules_check_reports_the_bad_field(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[rule.wave]\nlimbs = ['hand', 'elbow']\n")
+    assert main(["rules-check", str(bad)]) == ExitCode.BAD_INPUT
+    err = capsys.readouterr().err
+    assert "bad.toml: rule.wave.limbs[1]" in err and "valid limbs: hand" in err
+
+
+def test_events_table_in_climax_order(tmp_path, rig, capsys):
+    path = write_run(tmp_path / "run.mcap", rig, [EXCHANGE, CLAP])
+    assert main(["events", str(path)]) == ExitCode.OK
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].split()[:3] == ["time_s", "activity", "actors"]
+    assert lines[1].startswith("2.50") and "clap" in lines[1]
+    assert lines[2].startswith("12.40") and "exchange" in lines[2]
+    assert "p1/right_hand -> p2/left_hand" in lines[2]
+    assert "green (120 deg)" in lines[2] and "0.91" in lines[2]
+    assert "12.00-13.00" in lines[2]
+
+
+def test_events_json_lines(tmp_path, rig, capsys):
+    path = write_run(tmp_path / "run.mcap", rig, [EXCHANGE, CLAP])
+    assert main(["events", "--json", str(path)]) == ExitCode.OK
+    rows = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert [r["activity"] for r in rows] == ["clap", "exchange"]
+    ex = rows[1]
+    assert ex["climax_ns"] == EXCHANGE.climax_ns  # ns from t = 0, not the recording clock
+    assert (ex["from"], ex["to"]) == ("p1/right_hand", "p2/left_hand")
+    assert ex["object_colour"] == "green" and ex["object_hue_deg"] == pytest.approx(120.0)
+    assert ex["confidence"] == pytest.approx(0.91) and ex["rule"] == "default.toml:exchange"
+    assert rows[0]["object_hue_deg"] is None and rows[0]["from"] is None
+
+
+def test_events_of_a_run_without_events(tmp_path, rig, capsys):
+    path = write_run(tmp_path / "run.mcap", rig, [])
+    assert main(["events", str(path)]) == ExitCode.OK
+    assert "no events" in capsys.readouterr().out
+    assert main(["events", "--json", str(path)]) == ExitCode.OK
+    assert capsys.readouterr().out == ""
+
+
+def test_events_of_a_missing_file(tmp_path, capsys):
+    assert main(["events", str(tmp_path / "absent.mcap")]) == ExitCode.BAD_INPUT
+    assert "absent.mcap" in capsys.readouterr().err
