@@ -220,7 +220,6 @@ class ActivityEngine:
                 "call reset() to start a new stream"
             )
         self._last_t_ns = t
-        prev = self._frames[-1] if self._frames else None
         cur = _Frame(
             t,
             {s.target_id: s for s in frame.targets},
@@ -231,7 +230,7 @@ class ActivityEngine:
             self._frames.popleft()
 
         events: list[ActivityEvent] = []
-        self._on_transitions(frame, cur, prev)
+        events += self._on_transitions(frame, cur)
         self._open_by_proximity(cur)
         events += self._advance_pairs(cur)
         self._open_stills(cur)
@@ -332,7 +331,11 @@ class ActivityEngine:
         )
         log.debug("%s: climax of %s at %d ns", rule.rule_id, "+".join(labels), t_ns)
 
-    def _on_transitions(self, frame: TrackFrame, cur: _Frame, prev: _Frame | None) -> None:
+    def _on_transitions(self, frame: TrackFrame, cur: _Frame) -> list[ActivityEvent]:
+        """Open episodes at joins, mark separations. A join of a pair whose previous episode
+        is still waiting for its post-separation point (quick repeated claps) decides that one
+        first, as a timeout."""
+        events: list[ActivityEvent] = []
         for tr in frame.transitions:
             if tr.partner_id is None:
                 continue
@@ -341,15 +344,24 @@ class ActivityEngine:
                 partner_label = self._label_before(tr.partner_id, tr.partner_label)
                 if partner_label is None:
                     continue
+                labels = (tr.label, partner_label)
+                if _person(labels[0]) == 0 or _person(labels[1]) == 0:
+                    # rejoined before being relabelled: keep the labels of the pending episode
+                    labels = self._pending_labels(ids) or labels
                 for rule in self._pair_rules:
-                    ep = self._pairs.get((rule.name, frozenset(ids)))
+                    key = (rule.name, frozenset(ids))
+                    ep = self._pairs.get(key)
+                    if ep is not None and ep.separated_ns is not None:
+                        ev = self._decide_pair(ep, cur, timed_out=True)
+                        events += [ev] if ev else []
+                        del self._pairs[key]
+                        ep = None
                     if ep is not None:
-                        if not ep.combined and ep.separated_ns is None:
+                        if not ep.combined:
                             # opened by proximity: the tracker's join is the climax (§7.1)
                             ep.climax_ns = cur.t_ns
                         ep.combined = True
                         continue
-                    labels = (tr.label, partner_label)
                     self._open_pair(rule, ids, labels, cur.t_ns, combined=True)
             elif tr.old is Phase.COMBINED and tr.new in (Phase.UNLABELLED, Phase.NORMAL):
                 for ep in self._pairs.values():
@@ -361,6 +373,14 @@ class ActivityEngine:
                         # of the partner that is gone
                         ep.ids[ep.ids.index(other)] = tr.partner_id
                     ep.separated_ns = cur.t_ns
+        return events
+
+    def _pending_labels(self, ids: tuple[int, int]) -> tuple[str, str] | None:
+        for ep in self._pairs.values():
+            if set(ep.ids) == set(ids) and ep.separated_ns is not None:
+                by_id = dict(zip(ep.ids, ep.labels, strict=True))
+                return by_id[ids[0]], by_id[ids[1]]
+        return None
 
     def _open_by_proximity(self, cur: _Frame) -> None:
         live = [
@@ -390,7 +410,10 @@ class ActivityEngine:
             th = ep.rule.thresholds
             d = _distance(cur.targets.get(ep.ids[0]), cur.targets.get(ep.ids[1]))
             if ep.separated_ns is None:
-                if not ep.combined and (d is None or d > th.coincidence_m):
+                if not ep.combined and d is None:
+                    del self._pairs[key]  # a limb vanished while close: nothing to decide
+                    continue
+                if not ep.combined and d > th.coincidence_m:
                     ep.separated_ns = t
                 elif t - ep.climax_ns > _ns(th.max_coincidence_s):
                     log.debug("%s: gave up %s (no separation)", ep.rule.rule_id, ep.labels)
@@ -500,6 +523,11 @@ class ActivityEngine:
                     or key in self._still_disarmed
                 ):
                     continue
+                head = self._head_of(hand.person)
+                if head is None or not away_from_body(
+                    hand.mean_m, head, th.shoulder_drop_m, th.min_reach_m
+                ):
+                    continue  # cheap test first: most hands are at the body
                 since = cur.t_ns - _ns(th.max_approach_s + th.still_s)
                 ts, ps, _ = self._hand_track(hand.target_id, since)
                 first = still_since(ts, ps, th.still_s, th.still_speed_mps)
@@ -507,10 +535,9 @@ class ActivityEngine:
                     continue
                 _, _, normal = self._hand_track(hand.target_id, int(ts[first]))
                 point = ps[first:].mean(axis=0)
-                head = self._head_of(hand.person)
-                if not normal or head is None:
-                    continue
-                if not away_from_body(point, head, th.shoulder_drop_m, th.min_reach_m):
+                if not normal or not away_from_body(
+                    point, head, th.shoulder_drop_m, th.min_reach_m
+                ):
                     continue
                 if th.coincidence_m > 0 and any(
                     o.target_id != hand.target_id

@@ -376,3 +376,29 @@ def test_carry_keys_may_be_numpy_ints(rules):
     frame, carry = two_people().stream()[0]
     engine = ActivityEngine(rules)
     assert engine.step(frame, {np.int64(k): v for k, v in carry.items()}) == []
+
+
+def test_quick_repeated_claps_are_each_reported(rules):
+    """Two claps 0.5 s apart; between them the hands part by only 0.15 m and stay unlabelled:
+    the second join decides the first clap (as a timeout) and inherits its labels."""
+    left = keyframes(
+        (0.5, P1_LEFT_REST),
+        (1.0, (0.3, 0.02, 1.2)),
+        (1.35, (0.3, 0.095, 1.2)),
+        (1.5, (0.3, 0.02, 1.2)),
+        (2.2, P1_LEFT_REST),
+    )
+    right = keyframes(
+        (0.5, P1_RIGHT_REST),
+        (1.0, (0.3, -0.02, 1.2)),
+        (1.35, (0.3, -0.095, 1.2)),
+        (1.5, (0.3, -0.02, 1.2)),
+        (2.2, P1_RIGHT_REST),
+    )
+    tracks = [head(1, 1, 0.0), hand(2, 1, L, left), hand(3, 1, R, right)]
+    script = Script(tracks, [Join(2, 3, 1.0, 1.2), Join(2, 3, 1.5, 1.7)])
+    events = run(rules, script.stream())
+    assert [e.activity for e in events] == ["clap", "clap"]
+    assert [e.climax_ns / S for e in events] == pytest.approx([1.0, 1.5], abs=1 / 15)
+    assert all(e.actors == ("p1/left_hand", "p1/right_hand") for e in events)
+    assert events[0].confidence == pytest.approx(0.45) and events[1].confidence == 0.9
