@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import logging
 from collections import deque
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -642,3 +642,21 @@ def _first_hue(estimates: list[CarryEstimate], min_confidence: float) -> float |
         if carry_state(est, min_confidence) is True and est.hue_deg is not None:
             return float(est.hue_deg)
     return None
+
+
+def recognise(
+    rules: RuleSet, stream: Iterable[tuple[TrackFrame, Mapping[int, CarryEstimate]]]
+) -> list[ActivityEvent]:
+    """Every event of a whole stream: :meth:`ActivityEngine.step` on each frame, then
+    :meth:`ActivityEngine.finish`. For offline use and tests, e.g. on pipeline results:
+    ``recognise(rules, ((r.track, r.carry) for r in results))``.
+
+    >>> from surveil.activity.rules import load_rules
+    >>> recognise(load_rules(), [(TrackFrame(0, ()), {}), (TrackFrame(10, ()), {})])
+    []
+    """
+    engine = ActivityEngine(rules)
+    events: list[ActivityEvent] = []
+    for frame, carry in stream:
+        events += engine.step(frame, carry)
+    return events + engine.finish()

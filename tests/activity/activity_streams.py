@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from surveil.activity.engine import ActivityEngine
+from surveil.activity.engine import recognise
 from surveil.activity.rules import RuleSet
 from surveil.datatypes import (
     ActivityEvent,
@@ -166,13 +166,11 @@ class Script:
         return out
 
 
-def run(rules: RuleSet, stream: Sequence[tuple[TrackFrame, Mapping[int, CarryEstimate]]]):
+def run(
+    rules: RuleSet, stream: Sequence[tuple[TrackFrame, Mapping[int, CarryEstimate]]]
+) -> list[ActivityEvent]:
     """All events of a stream (online steps, then finish)."""
-    engine = ActivityEngine(rules)
-    events: list[ActivityEvent] = []
-    for frame, carry in stream:
-        events += engine.step(frame, carry)
-    return events + engine.finish()
+    return recognise(rules, stream)
 
 
 # ---- people: heads and hands at rest ---------------------------------------------------------

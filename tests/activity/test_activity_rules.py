@@ -163,3 +163,15 @@ def test_example_user_rules_load():
     assert examples
     rules = load_rules([default_rules_path(), *examples])
     assert "touch_face" in rules.names
+
+
+def test_end_to_end_helper_scenario_and_rules_load(tmp_path):
+    from activity_e2e import TOUCH_FACE_SCENARIO, assert_events_match, touch_face_rules
+
+    from surveil.synth.scenario import load_scenario
+
+    path = tmp_path / "touch_face.toml"
+    path.write_text(TOUCH_FACE_SCENARIO)
+    load_scenario(path)
+    assert touch_face_rules().names[-1] == "touch_face"
+    assert_events_match([], [], "touch_face")
