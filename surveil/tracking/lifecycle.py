@@ -7,12 +7,14 @@ from            when                                            to
 ==============  ==============================================  ==============
 uninitialised   an unexplained strong candidate persisted       unlabelled
 unlabelled      unsupported for ``lost_frames`` frame sets      lost
+unlabelled      drifted onto another tracker (see below)        lost
 unlabelled      its estimate came within ``combine_distance``   combined
                 of another tracker's
 unlabelled      the labelling cues gave it a full label         normal
-normal          unsupported for ``lost_frames``                 lost
+normal          unsupported for ``lost_frames``, or drifted     lost
 normal          close to another tracker (as above)             combined
-combined        unsupported for ``lost_frames`` (pooled level)  lost
+combined        unsupported for ``combined_lost_frames``        lost
+                (pooled level of the pair)
 combined        the two modes stayed apart                      unlabelled
 lost            retired: lost for ``retire_s`` (or              uninitialised
                 ``retire_unlabelled_s`` if never labelled)
@@ -27,6 +29,12 @@ Choices where the paper is silent, written down here:
   to *normal* at once, so labels are stable for the life of the track.
 - Retiring is the transition lost -> uninitialised: the tracker returns to the pool (the
   manager removes it). Its id is never reused.
+- Drift (section 5.2: "when a desired candidate point is not available, the particles tend to
+  approach other candidate points which represent other targets"): a tracker that was
+  unsupported in one of its last ``drift_window_frames`` frame sets and now comes within the
+  combine distance of another tracker has most likely slid onto that target's candidates; it
+  is lost rather than combined, so that a real coincidence (both trackers supported while
+  approaching) is not confused with a tracker that lost its own target.
 - Losing support beats every other transition (a combined pair with no candidate is lost,
   both trackers at once, since they share one pooled likelihood level).
 """
@@ -45,6 +53,7 @@ class Evidence:
 
     confirmed : bool -- (uninitialised) its seed candidate persisted long enough
     misses : int -- consecutive frame sets with a likelihood level below ``lost_level``
+    drifted : bool -- recently unsupported and now on top of another tracker
     partner_id : int | None -- (unlabelled/normal) the tracker it is paired with to combine
     separated : bool -- (combined) the two modes stayed apart long enough
     labelled : bool -- it has a full label (person and limb)
@@ -55,6 +64,7 @@ class Evidence:
 
     confirmed: bool = False
     misses: int = 0
+    drifted: bool = False
     partner_id: int | None = None
     separated: bool = False
     labelled: bool = False
@@ -89,7 +99,11 @@ def next_phase(phase: Phase, ev: Evidence, cfg: LifecycleConfig) -> Phase:
     match phase:
         case Phase.UNINITIALISED:
             return Phase.UNLABELLED if ev.confirmed else phase
-        case Phase.UNLABELLED | Phase.NORMAL | Phase.COMBINED if ev.misses >= cfg.lost_frames:
+        case Phase.UNLABELLED | Phase.NORMAL if ev.misses >= cfg.lost_frames:
+            return Phase.LOST
+        case Phase.COMBINED if ev.misses >= cfg.combined_lost_frames:
+            return Phase.LOST
+        case Phase.UNLABELLED | Phase.NORMAL if ev.drifted:
             return Phase.LOST
         case Phase.UNLABELLED | Phase.NORMAL if ev.partner_id is not None:
             return Phase.COMBINED

@@ -24,10 +24,12 @@ same output. Same for ``reset()``.
 from __future__ import annotations
 
 import logging
+from collections import deque
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.optimize import linear_sum_assignment
 
 from surveil.camera import Rig
 from surveil.datatypes import (
@@ -48,6 +50,7 @@ from surveil.tracking.settings import TrackingConfig
 log = logging.getLogger(__name__)
 
 ACTIVE = (Phase.UNLABELLED, Phase.NORMAL, Phase.COMBINED)
+HISTORY_FRAMES = 30  # estimates kept per tracker (for the angle rule's "before" vector)
 
 
 @dataclass(slots=True, eq=False)
@@ -66,6 +69,7 @@ class _Track:
     is_hand: bool | None = None  # typed as hand (True) / head (False); None = not yet
     attached_ns: int | None = None  # when a hand joined its person
     misses: int = 0
+    since_miss: int = 1 << 30  # frame sets since the last unsupported one
     level: float = 0.0
     lost_since_ns: int | None = None
     ever_labelled: bool = False
@@ -75,6 +79,7 @@ class _Track:
     partner: int | None = None
     before_vec_m: np.ndarray | None = None
     apart_frames: int = 0
+    history: deque = field(default_factory=lambda: deque(maxlen=HISTORY_FRAMES))
 
     @property
     def label(self) -> str:
@@ -193,14 +198,14 @@ class MultiTargetTracker:
         prior = np.asarray(candidates.prior, dtype=np.float64)
 
         self._filter(pts, prior, dt_s)
-        pairs = self._combine_pairs()
+        pairs, drifted = self._combine_pairs()
         self._measure_separation()
-        reacquired = self._reacquire(pts, prior, t_ns)
+        seeds = self._update_seeds(pts, prior, dt_s)
+        reacquired = self._reacquire(seeds, t_ns)
         rel_v = self._candidate_rel_v(candidates, observations)
         self._label(pts, rel_v, t_ns)
-        transitions = self._advance_phases(t_ns, pairs, reacquired, pts)
-        used = set(reacquired.values())
-        transitions += self._initialise(pts, prior, t_ns, dt_s, used)
+        transitions = self._advance_phases(t_ns, pairs, drifted, reacquired)
+        transitions += self._initialise(seeds, set(reacquired.values()), t_ns)
         return self._frame(t_ns, transitions)
 
     # ------------------------------------------------------------------ 1-2: SIR filters
@@ -239,7 +244,8 @@ class MultiTargetTracker:
             st[:, :3], pts, prior, fcfg.sigma_m, fcfg.clutter_level
         )
         starts = np.arange(len(blocks)) * n
-        level = np.add.reduceat(support, starts) / n
+        # likelihood level: the support of the best particle (the ML point, section 5.2)
+        level = np.maximum.reduceat(support, starts)
         log_w, _ = sir.block_normalise(log_lik, starts)
         mean, cov = sir.block_mean_cov(st, log_w, starts)
         keep = sir.block_systematic_resample(np.exp(log_w), starts, self._rng)
@@ -262,9 +268,12 @@ class MultiTargetTracker:
             tr.level = float(level[i])
             if tr.level < self.cfg.lifecycle.lost_level:
                 tr.misses += 1
+                tr.since_miss = 0
             else:
                 tr.misses = 0
+                tr.since_miss += 1
                 tr.last_good_m = tr.mean_m.copy()
+            tr.history.append((self._last_t_ns, tr.mean_m.copy()))
             a = self.cfg.labelling.evidence_alpha
             tr.speed_ema_mps = (1 - a) * tr.speed_ema_mps + a * float(np.linalg.norm(tr.vel_mps))
 
@@ -295,31 +304,39 @@ class MultiTargetTracker:
         for k, blk in ((0, i), (1, j)):
             wk = np.where(assign == k, w, 0.0) if mass[k] > 0 else w
             wk = wk / wk.sum()
-            idx = sir.systematic_resample(wk, self._rng)
+            idx = sir.systematic_resample(wk, self._rng, n)
             new[blk * n : (blk + 1) * n] = p_st[idx]
             m6, c6 = sir.block_mean_cov(p_st, np.log(np.maximum(wk, 1e-300)), np.zeros(1, int))
             mean[blk], cov[blk] = m6[0], c6[0]
-        level[i] = level[j] = float(support[pool].mean())
+        level[i] = level[j] = float(support[pool].max())
 
     # ------------------------------------------------------------------ 3: evidence
 
-    def _combine_pairs(self) -> dict[int, int]:
+    def _combine_pairs(self) -> tuple[dict[int, int], set[int]]:
         """Pairs of unlabelled/normal trackers whose estimates are closer than the combine
         distance; closest first, each tracker in at most one pair (at most two targets join
-        at once, paper 004 section 5)."""
+        at once, paper 004 section 5). A tracker of a close pair that was unsupported in its
+        last ``drift_window_frames`` frame sets has drifted instead (returned apart)."""
+        lc = self.cfg.lifecycle
         cand = [tr for tr in self._tracks.values() if tr.phase in (Phase.UNLABELLED, Phase.NORMAL)]
         if len(cand) < 2:
-            return {}
+            return {}, set()
         pos = np.array([tr.mean_m for tr in cand])
         d = np.linalg.norm(pos[:, None] - pos[None], axis=2)
         iu, ju = np.triu_indices(len(cand), 1)
-        close = d[iu, ju] < self.cfg.lifecycle.combine_distance_m
+        close = d[iu, ju] < lc.combine_distance_m
         pairs: dict[int, int] = {}
+        drifted: set[int] = set()
         for k in np.flatnonzero(close)[np.argsort(d[iu, ju][close], kind="stable")]:
-            a, b = cand[iu[k]].id, cand[ju[k]].id
-            if a not in pairs and b not in pairs:
-                pairs[a], pairs[b] = b, a
-        return pairs
+            a, b = cand[iu[k]], cand[ju[k]]
+            if a.id in pairs or b.id in pairs or a.id in drifted or b.id in drifted:
+                continue
+            bad = [tr for tr in (a, b) if tr.since_miss < lc.drift_window_frames]
+            if bad:  # the one that missed most recently slid onto the other
+                drifted.add(min(bad, key=lambda tr: (tr.since_miss, -tr.id)).id)
+            else:
+                pairs[a.id], pairs[b.id] = b.id, a.id
+        return pairs, drifted
 
     def _measure_separation(self) -> None:
         for tr in self._tracks.values():
@@ -341,26 +358,60 @@ class MultiTargetTracker:
             ok &= d.min(axis=1) > self.cfg.lifecycle.explained_radius_m
         return np.flatnonzero(ok)
 
-    def _reacquire(self, pts: np.ndarray, prior: np.ndarray, t_ns: int) -> dict[int, int]:
-        """Lost tracker id -> candidate index that re-acquires it (nearest unexplained strong
-        candidate within the gate around the last known position; most recently lost first)."""
+    def _update_seeds(self, pts: np.ndarray, prior: np.ndarray, dt_s: float) -> list[_Pending]:
+        """Strong candidates no active tracker explains, continued from the previous frame
+        set's (within ``init_gate_m``): the seeds of new and re-acquired trackers.
+
+        Non-maximum suppression (strongest first, ``explained_radius_m``) keeps one seed per
+        target. Returns this frame set's seeds; those with ``count >= init_confirm_frames``
+        persisted long enough to be trusted (one-frame ghosts never are)."""
+        lc = self.cfg.lifecycle
+        free = self._unexplained(pts, prior, lc.init_prior_min)
+        kept: list[int] = []
+        for k in sorted(free.tolist(), key=lambda k: (-prior[k], k)):
+            if all(np.linalg.norm(pts[k] - pts[j]) > lc.explained_radius_m for j in kept):
+                kept.append(k)
+        seeds: list[_Pending] = []
+        taken_prev: set[int] = set()
+        for k in kept:
+            best, best_d = -1, lc.init_gate_m
+            for i, pend in enumerate(self._pending):
+                d = float(np.linalg.norm(pts[k] - pend.position_m))
+                if i not in taken_prev and d <= best_d:
+                    best, best_d = i, d
+            if best >= 0:
+                taken_prev.add(best)
+                prev = self._pending[best]
+                vel = (pts[k] - prev.position_m) / dt_s if dt_s > 0 else np.zeros(3)
+                seeds.append(_Pending(pts[k].copy(), prev.count + 1, vel))
+            else:
+                seeds.append(_Pending(pts[k].copy(), 1, np.zeros(3)))
+        self._pending = seeds
+        return seeds
+
+    def _reacquire(self, seeds: list[_Pending], t_ns: int) -> dict[int, int]:
+        """Lost tracker id -> index of the confirmed seed that re-acquires it.
+
+        A lost tracker "behaves like an uninitialised one" but with its last known position
+        as a prior (section 5.2): it may take a confirmed seed within a gate around that
+        position (``reacquire_gate_m``, growing by ``reacquire_speed_mps`` per second lost,
+        at most ``reacquire_max_m``). Lost trackers and seeds are matched jointly by least
+        total distance (Hungarian), so two targets lost together are not swapped greedily."""
         lc = self.cfg.lifecycle
         lost = [tr for tr in self._tracks.values() if tr.phase is Phase.LOST]
-        if not lost or not len(pts):
+        ok = [i for i, sd in enumerate(seeds) if sd.count >= lc.init_confirm_frames]
+        if not lost or not ok:
             return {}
-        free = self._unexplained(pts, prior, lc.reacquire_prior_min)
-        out: dict[int, int] = {}
-        for tr in sorted(lost, key=lambda tr: (-(tr.lost_since_ns or 0), tr.id)):
-            if not len(free):
-                break
-            lost_s = (t_ns - (tr.lost_since_ns or t_ns)) * 1e-9
-            gate = min(lc.reacquire_gate_m + lc.reacquire_speed_mps * lost_s, lc.reacquire_max_m)
-            d = np.linalg.norm(pts[free] - tr.last_good_m, axis=1)
-            k = int(np.argmin(d))
-            if d[k] <= gate:
-                out[tr.id] = int(free[k])
-                free = np.delete(free, k)
-        return out
+        last = np.array([tr.last_good_m for tr in lost])
+        sp = np.array([seeds[i].position_m for i in ok])
+        d = np.linalg.norm(last[:, None] - sp[None], axis=2)
+        lost_s = np.array([(t_ns - (tr.lost_since_ns or t_ns)) * 1e-9 for tr in lost])
+        gate = np.minimum(
+            lc.reacquire_gate_m + lc.reacquire_speed_mps * lost_s, lc.reacquire_max_m
+        )
+        cost = np.where(d <= gate[:, None], d, 1e6)
+        rows, cols = linear_sum_assignment(cost)
+        return {lost[r].id: ok[c] for r, c in zip(rows, cols, strict=True) if cost[r, c] < 1e6}
 
     # ------------------------------------------------------------------ 4: labelling
 
@@ -532,14 +583,15 @@ class MultiTargetTracker:
         self,
         t_ns: int,
         pairs: dict[int, int],
+        drifted: set[int],
         reacquired: dict[int, int],
-        pts: np.ndarray,
     ) -> list[Transition]:
         lc = self.cfg.lifecycle
         plan: dict[int, Phase] = {}
         for tr in self._tracks.values():
             ev = Evidence(
                 misses=tr.misses,
+                drifted=tr.id in drifted,
                 partner_id=pairs.get(tr.id),
                 separated=tr.apart_frames >= lc.separate_frames,
                 labelled=tr.labelled,
@@ -553,7 +605,7 @@ class MultiTargetTracker:
             if new is Phase.COMBINED and tr.phase is not Phase.COMBINED:
                 # both of a pair must combine; a partner that goes lost instead cancels it
                 partner = self._tracks[pairs[tr.id]]
-                if partner.misses >= lc.lost_frames:
+                if next_phase(partner.phase, Evidence(misses=partner.misses), lc) is Phase.LOST:
                     new = tr.phase
             plan[tr.id] = new
         # a combined pair leaves together (lost or separated)
@@ -577,7 +629,7 @@ class MultiTargetTracker:
             if new is Phase.COMBINED:
                 partner_id = pairs[tid]
                 tr.partner = partner_id
-                tr.before_vec_m = self._tracks[partner_id].mean_m - tr.mean_m
+                tr.before_vec_m = self._before_vector(tr, self._tracks[partner_id])
                 tr.apart_frames = 0
             elif old is Phase.COMBINED:
                 partner_id = tr.partner
@@ -590,10 +642,12 @@ class MultiTargetTracker:
             if new is Phase.LOST:
                 tr.lost_since_ns = t_ns
                 tr.mean_m = tr.last_good_m.copy()
+                tr.misses = 0
             elif old is Phase.LOST and new is Phase.UNLABELLED:
-                self._reinit(tr, pts[reacquired[tid]], np.zeros(3))
+                self._reinit(tr, self._pending[reacquired[tid]].position_m, np.zeros(3))
                 tr.lost_since_ns = None
                 tr.misses = 0
+                tr.since_miss = 1 << 30
             if new is Phase.NORMAL:
                 tr.ever_labelled = True
             label, pos = before[tid]
@@ -614,6 +668,20 @@ class MultiTargetTracker:
             if new is Phase.UNINITIALISED:
                 self._remove(tid)
         return out
+
+    def _before_vector(self, a: _Track, b: _Track) -> np.ndarray:
+        """p_b - p_a "before they joined" (section 7.1): at the latest common time in the two
+        trackers' histories when they were at least ``separate_distance_m`` apart (their
+        estimates just before combining are too close for a reliable direction); the oldest
+        common time if they never were."""
+        hist_b = dict((t, m) for t, m in b.history)
+        common = [(t, m, hist_b[t]) for t, m in a.history if t in hist_b]
+        if not common:
+            return b.mean_m - a.mean_m
+        for _, pa, pb in reversed(common):
+            if np.linalg.norm(pb - pa) >= self.cfg.lifecycle.separate_distance_m:
+                return pb - pa
+        return common[0][2] - common[0][1]
 
     def _separate(self, a: _Track, b: _Track) -> None:
         """Apply the angle rule (section 7.1): a and b take the modes it gives them."""
@@ -658,51 +726,24 @@ class MultiTargetTracker:
 
     # ------------------------------------------------------------------ 6: initialisation
 
-    def _initialise(
-        self, pts: np.ndarray, prior: np.ndarray, t_ns: int, dt_s: float, used: set[int]
-    ) -> list[Transition]:
-        """Start trackers at strong, unexplained candidates that persisted for
-        ``init_confirm_frames`` frame sets (one-frame ghosts never start one)."""
+    def _initialise(self, seeds: list[_Pending], used: set[int], t_ns: int) -> list[Transition]:
+        """Start trackers at the confirmed seeds no lost tracker re-acquired (Fig. 1:
+        uninitialised -> unlabelled), while fewer than ``max_trackers`` are live."""
         lc = self.cfg.lifecycle
-        free = [k for k in self._unexplained(pts, prior, lc.init_prior_min) if k not in used]
-        # also not within reach of a candidate that just re-acquired a lost tracker
-        if used and free:
-            taken = pts[sorted(used)]
-            free = [
-                k
-                for k in free
-                if np.linalg.norm(taken - pts[k], axis=1).min() > lc.explained_radius_m
-            ]
-        # non-maximum suppression: strongest first
-        kept: list[int] = []
-        for k in sorted(free, key=lambda k: (-prior[k], k)):
-            if all(np.linalg.norm(pts[k] - pts[j]) > lc.explained_radius_m for j in kept):
-                kept.append(k)
-        pending: list[_Pending] = []
-        taken_prev: set[int] = set()
         out: list[Transition] = []
-        for k in kept:
-            best, best_d = -1, lc.init_gate_m
-            for i, pend in enumerate(self._pending):
-                d = float(np.linalg.norm(pts[k] - pend.position_m))
-                if i not in taken_prev and d <= best_d:
-                    best, best_d = i, d
-            if best >= 0:
-                taken_prev.add(best)
-                prev = self._pending[best]
-                vel = (pts[k] - prev.position_m) / dt_s if dt_s > 0 else np.zeros(3)
-                pend = _Pending(pts[k].copy(), prev.count + 1, vel)
-            else:
-                pend = _Pending(pts[k].copy(), 1, np.zeros(3))
-            n_live = len(self._tracks)
-            ev = Evidence(confirmed=pend.count >= lc.init_confirm_frames)
-            if next_phase(Phase.UNINITIALISED, ev, lc) is Phase.UNLABELLED and (
-                n_live < lc.max_trackers
+        keep: list[_Pending] = []
+        for i, seed in enumerate(seeds):
+            if i in used:
+                continue
+            ev = Evidence(confirmed=seed.count >= lc.init_confirm_frames)
+            if (
+                next_phase(Phase.UNINITIALISED, ev, lc) is Phase.UNLABELLED
+                and len(self._tracks) < lc.max_trackers
             ):
-                out.append(self._spawn(pend, t_ns))
+                out.append(self._spawn(seed, t_ns))
             else:
-                pending.append(pend)
-        self._pending = pending
+                keep.append(seed)
+        self._pending = keep
         return out
 
     def _spawn(self, pend: _Pending, t_ns: int) -> Transition:

@@ -26,10 +26,10 @@ class FilterConfig:
 
     n_particles: int = setting(200, "particles per target", min=10, max=100_000)
     accel_std_hand_mps2: float = setting(
-        25.0, "acceleration noise of hands and untyped targets (fast, abrupt), m/s^2", min=0.0
+        8.0, "acceleration noise of hands and untyped targets (fast, abrupt), m/s^2", min=0.0
     )
     accel_std_head_mps2: float = setting(
-        4.0, "acceleration noise of heads (slow, smooth), m/s^2", min=0.0
+        2.0, "acceleration noise of heads (slow, smooth), m/s^2", min=0.0
     )
     position_jitter_m: float = setting(
         0.005, "extra random-walk position noise per step (keeps diversity), m", min=0.0
@@ -41,7 +41,7 @@ class FilterConfig:
         0.5, "a longer gap between frame sets is predicted as this long, s", min=0.001
     )
     sigma_m: float = setting(
-        0.04, "sigma of N(x; Z_c, sigma^2) in the likelihood (eq. 17), m", min=1e-4
+        0.03, "sigma of N(x; Z_c, sigma^2) in the likelihood (eq. 17), m", min=1e-4
     )
     clutter_level: float = setting(
         1e-3,
@@ -61,10 +61,16 @@ class LifecycleConfig:
     """The tracker state machine (paper 004 section 5.2, Fig. 1)."""
 
     init_prior_min: float = setting(
-        0.3, "only candidates with a prior p(Z) at least this start a tracker", min=0.0, max=1.0
+        0.3,
+        "only candidates with a prior p(Z) at least this start or re-acquire a tracker",
+        min=0.0,
+        max=1.0,
     )
     init_confirm_frames: int = setting(
-        2, "consecutive frame sets an unexplained candidate must persist to start one", min=1
+        2,
+        "consecutive frame sets an unexplained candidate must persist to start or re-acquire "
+        "a tracker",
+        min=1,
     )
     init_gate_m: float = setting(
         0.12, "a candidate continues a pending one of the previous set within this, m", min=0.0
@@ -85,13 +91,25 @@ class LifecycleConfig:
         2, "consecutive frame sets the modes must stay apart before separating", min=1
     )
     lost_level: float = setting(
-        0.02,
-        "a tracker whose mean particle support sum_c exp(-d^2/2s^2) p(Z_c) stays below this "
-        "is unsupported, unitless",
+        0.05,
+        "a tracker whose best particle's support max_i sum_c exp(-d_ic^2/2s^2) p(Z_c) stays "
+        "below this is unsupported, unitless",
         min=0.0,
+    )
+    drift_window_frames: int = setting(
+        2,
+        "a tracker unsupported in any of its last this many frame sets that comes within "
+        "combine_distance_m of another has drifted onto it: lost, not combined",
+        min=0,
     )
     lost_frames: int = setting(
         3, "consecutive unsupported frame sets before a tracker is lost", min=1
+    )
+    combined_lost_frames: int = setting(
+        8,
+        "consecutive unsupported frame sets before a combined pair is lost (joined hands are "
+        "often hidden for a few frames; the pooled cloud coasts through)",
+        min=1,
     )
     reacquire_gate_m: float = setting(
         0.25,
@@ -102,12 +120,6 @@ class LifecycleConfig:
         0.5, "the re-acquisition gate grows by this per second lost, m/s", min=0.0
     )
     reacquire_max_m: float = setting(0.8, "the re-acquisition gate never exceeds this, m", min=0.0)
-    reacquire_prior_min: float = setting(
-        0.2,
-        "only candidates with a prior at least this re-acquire a lost target",
-        min=0.0,
-        max=1.0,
-    )
     retire_s: float = setting(
         3.0, "a labelled tracker lost for this long is retired (removed), s", min=0.0
     )

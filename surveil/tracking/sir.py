@@ -276,29 +276,46 @@ def block_effective_sample_size(log_w_norm: np.ndarray, starts: np.ndarray) -> n
     return 1.0 / np.add.reduceat(w * w, starts)
 
 
-def systematic_resample(weights: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+def systematic_resample(
+    weights: np.ndarray, rng: np.random.Generator, n_out: int | None = None
+) -> np.ndarray:
     """Indices of the particles kept by systematic resampling.
 
-    One uniform offset u ~ U[0, 1/N); positions (u + i)/N, i = 0..N-1, are looked up in the
-    weights' CDF. Particle i is kept floor(N w_i) or ceil(N w_i) times (Douc et al. 2005).
+    One uniform offset u ~ U[0, 1); positions (u + i)/M, i = 0..M-1, are looked up in the
+    weights' CDF. With M = N, particle i is kept floor(N w_i) or ceil(N w_i) times (Douc et
+    al. 2005).
 
     Parameters
     ----------
     weights : (N,) float64
-        Non-negative, summing to 1.
+        Non-negative, summing to 1 (renormalised if not).
     rng : np.random.Generator
+    n_out : int, optional
+        M, the number of indices to draw (default N).
 
     Returns
     -------
-    (N,) intp
+    (M,) intp
 
     Examples
     --------
     >>> systematic_resample(np.array([0.0, 1.0, 0.0]), np.random.default_rng(0)).tolist()
     [1, 1, 1]
+    >>> systematic_resample(np.array([0.5, 0.5]), np.random.default_rng(0), 4).tolist()
+    [0, 0, 1, 1]
     """
     weights = np.asarray(weights, dtype=np.float64)
-    return block_systematic_resample(weights, np.zeros(1, dtype=np.intp), rng)
+    require_shape("weights", weights, (None,), np.floating)
+    n = len(weights)
+    m = n if n_out is None else int(n_out)
+    if n == 0 or m == 0:
+        return np.zeros(0, dtype=np.intp)
+    if np.any(weights < 0) or not np.all(np.isfinite(weights)) or weights.sum() <= 0:
+        raise ValueError("weights must be finite, non-negative and not all zero")
+    cdf = np.cumsum(weights / weights.sum())
+    cdf[-1] = 1.0  # round-off guard: every position must land inside the CDF
+    positions = (rng.random() + np.arange(m)) / m
+    return np.minimum(np.searchsorted(cdf, positions, side="right"), n - 1)
 
 
 def block_systematic_resample(
