@@ -224,12 +224,13 @@ class MultiTargetTracker:
         blocks = np.flatnonzero(act)
         act_tracks = [tracks[b] for b in blocks]
         rows = self._block_rows(blocks)
-        accel = np.repeat(
-            [
-                fcfg.accel_std_head_mps2 if tr.is_hand is False else fcfg.accel_std_hand_mps2
-                for tr in act_tracks
-            ],
-            n,
+        is_head = np.repeat([tr.is_hand is False for tr in act_tracks], n)
+        # hands (and untyped targets): a mixture of smooth and jerky accelerations
+        jerk = self._rng.random(len(rows)) < fcfg.jerk_fraction
+        accel = np.where(
+            is_head,
+            fcfg.accel_std_head_mps2,
+            np.where(jerk, fcfg.accel_std_jerk_mps2, fcfg.accel_std_hand_mps2),
         )
         st = sir.predict_constant_velocity(
             self._states[rows],

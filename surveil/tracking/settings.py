@@ -28,6 +28,16 @@ class FilterConfig:
     accel_std_hand_mps2: float = setting(
         8.0, "acceleration noise of hands and untyped targets (fast, abrupt), m/s^2", min=0.0
     )
+    jerk_fraction: float = setting(
+        0.2,
+        "share of hand particles predicted with the jerk noise instead (hands start and stop "
+        "abruptly: a two-component mixture prior)",
+        min=0.0,
+        max=1.0,
+    )
+    accel_std_jerk_mps2: float = setting(
+        40.0, "acceleration noise of that share of hand particles, m/s^2", min=0.0
+    )
     accel_std_head_mps2: float = setting(
         2.0, "acceleration noise of heads (slow, smooth), m/s^2", min=0.0
     )
