@@ -22,8 +22,12 @@ Choices where the paper leaves freedom (docs/carry.md):
 - *Overlap.* Two hands closer than ``overlap_distance_m`` in 3D freeze their windows: no
   samples are added and the estimate from before the overlap is returned, until they are
   ``separation_margin_m`` farther apart; then the window restarts empty (it "begins after the
-  instant the circular regions intersect"). In a single camera, a hand whose largest circle
-  would overlap another hand's contributes nothing from that camera for that frame.
+  instant the circular regions intersect"). In a single camera, a blob claimed by several
+  hands goes to the nearest (the others are hidden behind it), and two hands whose circles
+  intersect contribute nothing from that camera for that frame.
+- *Extent test.* A mode whose same-hue patches continue far beyond the circle (more than
+  ``max_mode_extent`` times their area inside it) is dress or furniture, not a carried object
+  (see :func:`surveil.carry.hue.connected_modes`).
 """
 
 from __future__ import annotations
@@ -229,6 +233,8 @@ class HandView:
     pdf : (B,) float64 -- hue distribution of the region's connected modes (mass <= 1)
     modes_deg : (K,) float64 -- hues of the kept modes, strongest first
     n_region_px : int -- pixels in the filtered region
+    blob_label : int -- the hand's blob in ``BlobSet.labels``
+    depth_m : float -- the hand's depth in the camera, metres
     """
 
     camera: str
@@ -238,6 +244,8 @@ class HandView:
     pdf: np.ndarray
     modes_deg: np.ndarray
     n_region_px: int
+    blob_label: int
+    depth_m: float
 
 
 def projected_radius_px(
@@ -303,9 +311,12 @@ def analyse_hand_view(
     blob = blob_labels == label
     rows, cols = np.nonzero(blob)
     pts = np.column_stack([cols, rows]).astype(np.float64)
-    near = np.sum((pts - (uv - origin)) ** 2, axis=1) <= r_hi**2
-    if near.any():
-        pts = pts[near]
+    # centre on the blob's pixels near the hand (a bare forearm must not drag the circle away)
+    d2 = np.sum((pts - (uv - origin)) ** 2, axis=1)
+    for reach in (r_lo, r_hi):
+        if np.any(d2 <= reach**2):
+            pts = pts[d2 <= reach**2]
+            break
     centre = pts.mean(axis=0)
     r_blob = float(np.sqrt(np.max(np.sum((pts - centre) ** 2, axis=1)))) + 0.5
     r_small = min(max(r_lo, r_blob), r_hi)
@@ -316,6 +327,7 @@ def analyse_hand_view(
     skin = observation.skin[y0:y1, x0:x1]
     region = hand_region(foreground, skin, blob, centre, float(radii[k]))
     hues = pixel_hues(bgr[y0:y1, x0:x1], cfg.min_saturation, cfg.min_value)
+    outer = np.where(foreground & ~skin, hues, np.float32(np.nan))
     pdf, modes = region_mode_pdf(
         hues,
         region,
@@ -324,6 +336,8 @@ def analyse_hand_view(
         min_peak=cfg.mode_min_peak,
         halfwidth_deg=cfg.mode_halfwidth_deg,
         min_pixels=cfg.mode_min_pixels,
+        outer_hue_img=outer,
+        max_extent=cfg.max_mode_extent,
     )
     return HandView(
         camera=camera.name,
@@ -333,6 +347,8 @@ def analyse_hand_view(
         pdf=pdf,
         modes_deg=modes,
         n_region_px=int(np.count_nonzero(region)),
+        blob_label=label,
+        depth_m=z,
     )
 
 
@@ -436,10 +452,13 @@ class CarryAnalyser:
             cam = self._cams.get(cam_name)
             if obs is None or cam is None:
                 continue
-            for j in np.flatnonzero(active & self._clear_in_view(cam, pos)):
+            views = {}
+            for j in np.flatnonzero(active):
                 view = analyse_hand_view(img, obs, cam, pos[j], cfg)
                 if view is not None:
-                    self._hands[ids[j]].window.push(t_ns, view.rho, view.pdf)
+                    views[int(j)] = view
+            for j in _unambiguous_views(views):
+                self._hands[ids[j]].window.push(t_ns, views[j].rho, views[j].pdf)
         fused = {tid: self._hands[tid].window.fused(t_ns, self._window_ns) for tid in ids}
         siblings = _siblings(hands) if cfg.subtract_clothing else {}
         out: dict[int, CarryEstimate] = {}
@@ -475,22 +494,6 @@ class CarryAnalyser:
                 state.window.clear()
                 log.debug("carry: hand %d separated; window restarted", tid)
 
-    def _clear_in_view(self, cam: Camera, pos: np.ndarray) -> np.ndarray:
-        """(H,) bool: the hand projects into the image and its largest circle overlaps no
-        other hand's largest circle there."""
-        px, depth = cam.project(pos)
-        seen = cam.in_image(px, depth)
-        f = cam.K[0, 0]
-        r = np.clip(
-            f * self.cfg.max_radius_m / np.maximum(depth, 1e-9),
-            self.cfg.min_radius_px,
-            self.cfg.max_radius_px,
-        )
-        gap = np.linalg.norm(px[:, None, :] - px[None, :, :], axis=2)
-        touch = (gap < r[:, None] + r[None, :]) & seen[:, None] & seen[None, :]
-        np.fill_diagonal(touch, False)
-        return seen & ~touch.any(axis=1)
-
     def _estimate(
         self, target: TargetSnapshot, t_ns: int, pdf: np.ndarray, total_rho: float
     ) -> CarryEstimate:
@@ -513,6 +516,31 @@ class CarryAnalyser:
             confidence=float(np.clip(decision.confidence, 0.0, 1.0)),
             hue_pdf=hue_pdf,
         )
+
+
+def _unambiguous_views(views: Mapping[int, HandView]) -> list[int]:
+    """Keys of the views that may feed their hand's window.
+
+    A blob claimed by several hands belongs to the nearest one (the others are behind it);
+    two hands whose circles intersect in the image both give nothing (one object must not be
+    counted in both hands, paper 004 section 7.3).
+    """
+    owner: dict[int, int] = {}
+    for j, v in views.items():
+        if v.blob_label not in owner or v.depth_m < views[owner[v.blob_label]].depth_m:
+            owner[v.blob_label] = j
+    keep = sorted(owner.values())
+    out = []
+    for j in keep:
+        vj = views[j]
+        clash = any(
+            np.hypot(*(vj.centre_px - views[k].centre_px)) < vj.radius_px + views[k].radius_px
+            for k in keep
+            if k != j
+        )
+        if not clash:
+            out.append(j)
+    return out
 
 
 def _siblings(hands: Sequence[TargetSnapshot]) -> dict[int, int]:

@@ -204,7 +204,13 @@ def refine_peak_deg(density: np.ndarray, peak_bin: int) -> float:
 
 
 def connected_modes(
-    hue_img: np.ndarray, modes_deg: np.ndarray, halfwidth_deg: float, min_pixels: int
+    hue_img: np.ndarray,
+    modes_deg: np.ndarray,
+    halfwidth_deg: float,
+    min_pixels: int,
+    *,
+    outer_hue_img: np.ndarray | None = None,
+    max_extent: float = 0.0,
 ) -> np.ndarray:
     """Connectivity check of section 7.2.2: is each mode a compact patch in the image?
 
@@ -222,6 +228,15 @@ def connected_modes(
         delta (paper: about 3 degrees).
     min_pixels : int
         n (paper: 10).
+    outer_hue_img : (H, W) float, optional
+        Hues of a larger neighbourhood (NaN outside it) that contains ``hue_img``'s pixels.
+        With ``max_extent > 0``, a mode is also dropped when its patches, followed into this
+        neighbourhood, are more than ``max_extent`` times larger than inside the region: the
+        colour belongs to something that extends beyond the hand's circle (dress, trousers,
+        furniture) rather than to a compact carried object. (An addition to the paper, which
+        removes the sleeve where it crosses the bounding circle.)
+    max_extent : float
+        0 disables the extent test.
 
     Returns
     -------
@@ -234,6 +249,10 @@ def connected_modes(
     >>> img[10::3, 0::3] = 240.0        # 21 isolated pixels
     >>> connected_modes(img, np.array([120.0, 240.0]), 3.0, 10).tolist()
     [True, False]
+    >>> outer = np.full((20, 20), 120.0, np.float32)  # the patch continues far outside
+    >>> connected_modes(img, np.array([120.0]), 3.0, 10, outer_hue_img=outer,
+    ...                 max_extent=3.0).tolist()
+    [False]
     """
     require_shape("hue_img", hue_img, (None, None), np.floating)
     modes = np.asarray(modes_deg, np.float64).reshape(-1)
@@ -246,6 +265,13 @@ def connected_modes(
             continue
         _, _, stats, _ = cv2.connectedComponentsWithStats(near.view(np.uint8), connectivity=8)
         keep[k] = stats[1:, cv2.CC_STAT_AREA].max() >= min_pixels
+        if keep[k] and outer_hue_img is not None and max_extent > 0:
+            far = (circular_distance_deg(outer_hue_img, mode) <= halfwidth_deg) | near
+            _, labels = cv2.connectedComponents(far.view(np.uint8), connectivity=8)
+            hit = np.zeros(int(labels.max()) + 1, bool)
+            hit[labels[near]] = True
+            hit[0] = False
+            keep[k] = np.count_nonzero(hit[labels]) <= max_extent * np.count_nonzero(near)
     return keep
 
 
@@ -258,6 +284,8 @@ def region_mode_pdf(
     min_peak: float,
     halfwidth_deg: float,
     min_pixels: int,
+    outer_hue_img: np.ndarray | None = None,
+    max_extent: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The hue distribution of a region, restricted to its connected modes.
 
@@ -272,9 +300,11 @@ def region_mode_pdf(
         Hue per pixel in degrees, NaN where unreliable (see :func:`pixel_hues`).
     region : (H, W) bool
         The pixels to analyse.
-    n_bins, sigma_deg, min_peak, halfwidth_deg, min_pixels
+    n_bins, sigma_deg, min_peak, halfwidth_deg, min_pixels, max_extent
         See :class:`surveil.carry.settings.CarryConfig` (``hue_bins``, ``kde_sigma_deg``,
-        ``mode_min_peak``, ``mode_halfwidth_deg``, ``mode_min_pixels``).
+        ``mode_min_peak``, ``mode_halfwidth_deg``, ``mode_min_pixels``, ``max_mode_extent``).
+    outer_hue_img : (H, W) float, optional
+        Hues around the region for the extent test of :func:`connected_modes`.
 
     Returns
     -------
@@ -303,7 +333,14 @@ def region_mode_pdf(
         return np.zeros(n_bins), np.zeros(0)
     modes_deg = np.array([refine_peak_deg(density, m) for m in modes])
     masked = np.where(region, hue_img, np.float32(np.nan))
-    keep = connected_modes(masked, modes_deg, halfwidth_deg, min_pixels)
+    keep = connected_modes(
+        masked,
+        modes_deg,
+        halfwidth_deg,
+        min_pixels,
+        outer_hue_img=outer_hue_img,
+        max_extent=max_extent,
+    )
     kept_bins = np.zeros(n_bins, bool)
     kept_bins[modes[keep]] = True
     pdf = np.where(kept_bins[mode_basins(density)], density, 0.0)

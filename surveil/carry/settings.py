@@ -61,6 +61,11 @@ class CarryConfig:
     mode_min_pixels: int = setting(
         10, "n: a mode needs a connected region of this many pixels (paper: 10)", min=1
     )
+    max_mode_extent: float = setting(
+        2.5,
+        "drop a mode whose patches extend to > this x their area in the circle (0 = off)",
+        min=0.0,
+    )
     mode_min_peak: float = setting(
         0.002, "smoothed-histogram maxima below this density (per bin) are not modes", min=0.0
     )
