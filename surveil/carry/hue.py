@@ -71,7 +71,8 @@ def circular_distance_deg(a: np.ndarray | float, b: np.ndarray | float) -> np.nd
     >>> circular_distance_deg(np.array([350.0, 10.0, 90.0]), 5.0).tolist()
     [15.0, 5.0, 85.0]
     """
-    d = np.abs(np.asarray(a, np.float64) - np.asarray(b, np.float64)) % 360.0
+    # float32 images stay float32 (no copy to float64 on the hot path)
+    d = np.abs(np.subtract(a, b, dtype=np.result_type(a, np.float32))) % 360.0
     return np.minimum(d, 360.0 - d)
 
 
