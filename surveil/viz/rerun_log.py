@@ -115,6 +115,8 @@ def silhouette_outlines(labels: np.ndarray, scale: float = 1.0) -> list[np.ndarr
     contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     out = []
     for c in contours:
+        if len(c) > 8:  # simplify long outlines to within 1 px: a tenth of the points
+            c = cv2.approxPolyDP(c, 1.0, True)
         pts = c.reshape(-1, 2).astype(np.float32)
         out.append(np.vstack([pts, pts[:1]]) * np.float32(scale))
     return out
@@ -195,7 +197,13 @@ class RerunSink:
         self.image_scale = float(image_scale)
         self.trail_ns = round(trail_s * 1e9)
         self.start_time_ns = int(start_time_ns)
-        self._rec = rr.RecordingStream(application_id, recording_id=recording_id)
+        # Few, large chunks: with the default thresholds (0.2 s, 2 MiB) the camera frames
+        # flush the batcher every few frames and each small entity gets a chunk of one or two
+        # rows, whose schema costs more than its data (about a fifth of the file).
+        batcher = rr.ChunkBatcherConfig(flush_tick=5.0, flush_num_bytes=64 << 20)
+        self._rec = rr.RecordingStream(
+            application_id, recording_id=recording_id, batcher_config=batcher
+        )
         layout = build_blueprint(names, eye=default_eye(rig, names)) if blueprint else None
         self._rec.save(self.path, default_blueprint=layout)
         self._tracks: dict[int, _Track] = {}

@@ -138,7 +138,7 @@ def screenshot(
         if at_s is not None:
             client.set_time("time", duration=float(at_s), play_state="paused")
         else:
-            client.set_time("time", play_state="following")
+            client.set_time(play_state="following")
         time.sleep(settle_s)
         client.save_screenshot(str(png))
     finally:
