@@ -1,12 +1,13 @@
 """Command-line interface: the only place where exceptions become messages and exit codes.
 
-Subcommands: ``demo``, ``synth``, ``info``, ``eval``, ``truth``, ``rig``, ``review``,
-``rules-check``, ``events``.
+Subcommands: ``demo``, ``run``, ``synth``, ``info``, ``eval``, ``truth``, ``train-skin``,
+``rig``, ``review``, ``rules-check``, ``events``.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import enum
 import json
 import logging
@@ -138,6 +139,64 @@ def cmd_eval(args: argparse.Namespace) -> ExitCode:
     return ExitCode.OK
 
 
+def cmd_run(args: argparse.Namespace) -> ExitCode:
+    from surveil.activity import load_rules
+    from surveil.io.mcap_writer import McapSink, McapWriter
+    from surveil.io.recording import open_recording
+    from surveil.io.skin_model import load_camera_skin_models
+    from surveil.pipeline import (
+        Pipeline,
+        config_as_dict,
+        load_pipeline_config,
+        run_recording,
+    )
+
+    cfg = load_pipeline_config(args.config)
+    if args.seed is not None:
+        cfg = dataclasses.replace(cfg, seed=args.seed)
+    rules = load_rules(args.rules or None)
+    rec = open_recording(args.recording)
+    out = args.out or args.recording.with_suffix(".mcap")
+    if out.is_dir():
+        raise SurveilError(f"--out {out} is a directory; give a file name ending in .mcap")
+    skin_models = load_camera_skin_models(rec.rig_path, rec.camera_names)
+    pipeline = Pipeline(cfg, rec.rig, rules, skin_models)
+    metadata = {
+        "run": {
+            "recording": str(Path(args.recording).resolve()),
+            "config": json.dumps(config_as_dict(cfg), sort_keys=True),
+            "rules": json.dumps(rules.to_metadata(), sort_keys=True),
+            "skin_models": json.dumps({c: m.meta for c, m in skin_models.items()}, default=str),
+        }
+    }
+    sinks: list = [
+        McapSink(McapWriter(out, rec.rig, metadata=metadata, start_time_ns=rec.start_time_ns))
+    ]
+    if args.rrd is not None:
+        from surveil.viz.rerun_log import RerunSink
+
+        sinks.append(
+            RerunSink(args.rrd, rec.rig, rec.camera_names, start_time_ns=rec.start_time_ns)
+        )
+    stop = None if args.max_frames is None else args.max_frames
+    n = rec.count_framesets(0, stop)
+    summary = run_recording(
+        lambda: rec.framesets(0, stop),
+        n,
+        pipeline,
+        sinks,
+        on_progress=progress_bar(f"run {args.recording.name}", args.quiet),
+    )
+    print(summary.format())
+    if summary.events:
+        from surveil.activity.timeline import format_event_table
+        from surveil.io.mcap_writer import hue_name
+
+        print(format_event_table(sorted(summary.events, key=lambda e: e.climax_ns), hue_name))
+    print(f"wrote {out}" + (f" and {args.rrd}" if args.rrd else ""))
+    return ExitCode.OK
+
+
 def cmd_truth(args: argparse.Namespace) -> ExitCode:
     from surveil.eval.truth_mcap import write_truth_mcap
 
@@ -161,6 +220,40 @@ def cmd_rig_export(args: argparse.Namespace) -> ExitCode:
     rig = load_rig(args.rig)
     export_aniposelib(rig, args.out)
     print(f"wrote {args.out} (aniposelib TOML, metres)")
+    return ExitCode.OK
+
+
+def cmd_train_skin(args: argparse.Namespace) -> ExitCode:
+    import numpy as np
+
+    from surveil.io.recording import open_recording
+    from surveil.io.skin_model import (
+        build_default_skin_model,
+        save_skin_model,
+        skin_models_dir,
+        train_camera_skin_models,
+    )
+
+    rng = np.random.default_rng(args.seed)
+    if args.generic:
+        if args.out is None:
+            raise SurveilError("train-skin --generic needs --out FILE.npz")
+        model = build_default_skin_model(args.recordings, rng, every=args.every)
+        save_skin_model(model, args.out)
+        print(f"wrote {args.out} (generic model, {model.lut.mean():.1%} of colours are skin)")
+        return ExitCode.OK
+    if len(args.recordings) != 1:
+        raise SurveilError("train-skin trains per-camera models from one recording at a time")
+    rec_dir = args.recordings[0]
+    rec = open_recording(rec_dir)
+    out_dir = args.out or skin_models_dir(rec.rig_path)
+    models = train_camera_skin_models(
+        rec_dir, rng, every=args.every, on_progress=progress_bar("train-skin", args.quiet)
+    )
+    for cam, model in models.items():
+        path = out_dir / f"{cam}.npz"
+        save_skin_model(model, path)
+        print(f"wrote {path} ({model.lut.mean():.1%} of colours are skin)")
     return ExitCode.OK
 
 
@@ -249,6 +342,25 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("demo", help="synthesise (once) and process the bundled demo recording")
     p.add_argument("--out", type=Path, default=None, help="where to put the demo recording")
     p.set_defaults(command=cmd_demo)
+
+    p = sub.add_parser("run", help="track heads and hands, recognise activities, write MCAP")
+    p.add_argument("recording", type=Path, help="recording directory (with recording.toml)")
+    p.add_argument(
+        "--out", type=Path, default=None, help="output MCAP [<recording>.mcap beside it]"
+    )
+    p.add_argument("--rrd", type=Path, default=None, help="also write a Rerun review file")
+    p.add_argument(
+        "--rules",
+        type=Path,
+        action="append",
+        help="activity rule file (repeatable; default: the default rules)",
+    )
+    p.add_argument("--config", type=Path, default=None, help="settings TOML (docs/pipeline.md)")
+    p.add_argument("--seed", type=int, default=None, help="override the config's seed")
+    p.add_argument(
+        "--max-frames", type=int, default=None, help="process only the first N frame sets"
+    )
+    p.set_defaults(command=cmd_run)
 
     p = sub.add_parser("synth", help="render a synthetic recording with ground truth")
     p.add_argument("scenario", type=Path, help="scenario TOML (see recordings/*.toml)")
@@ -351,6 +463,31 @@ def build_parser() -> argparse.ArgumentParser:
         help="do not recompute silhouettes and skin blobs (faster)",
     )
     p.set_defaults(command=cmd_review)
+
+    p = sub.add_parser(
+        "train-skin",
+        help="train per-camera skin classifiers from an annotated recording, saved beside its rig",
+    )
+    p.add_argument(
+        "recordings",
+        type=Path,
+        nargs="+",
+        help="recording(s) with ground_truth/masks (synthetic, or annotated by hand)",
+    )
+    p.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        help="output folder [<rig dir>/<rig stem>_skin/], or the .npz with --generic",
+    )
+    p.add_argument(
+        "--generic",
+        action="store_true",
+        help="one model for all cameras of all recordings (+ a photo), like the default",
+    )
+    p.add_argument("--every", type=int, default=2, help="use every N-th annotated frame [2]")
+    p.add_argument("--seed", type=int, default=0, help="seed of the pixel subsample [0]")
+    p.set_defaults(command=cmd_train_skin)
 
     p = sub.add_parser("rig", help="import, export calibration rigs")
     rig_sub = p.add_subparsers(dest="rig_command", required=True, metavar="ACTION")

@@ -99,6 +99,7 @@ class BackgroundModel:
             varThreshold=self.cfg.var_threshold,
             detectShadows=True,
         )
+        self._mog.setBackgroundRatio(self.cfg.background_ratio)
         self.n_frames = 0
 
     @property

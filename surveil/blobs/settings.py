@@ -21,7 +21,19 @@ class BackgroundConfig:
     learning_rate_initial: float = setting(
         -1.0, "MOG2 rate during learning (-1 = automatic 1/n)", min=-1.0, max=1.0
     )
-    learning_rate: float = setting(0.002, "MOG2 rate after learning", min=0.0, max=1.0)
+    learning_rate: float = setting(
+        0.0005,
+        "MOG2 rate after learning (with background_ratio 0.7 a still person is absorbed "
+        "after about 700 frames; 0.002 absorbed one in 4 s)",
+        min=0.0,
+        max=1.0,
+    )
+    background_ratio: float = setting(
+        0.7,
+        "MOG2 backgroundRatio: weight a colour mode needs to count as background",
+        min=0.05,
+        max=1.0,
+    )
     open_px: int = setting(3, "elliptical opening kernel diameter, px (0 = none)", min=0)
     close_px: int = setting(9, "elliptical closing kernel diameter, px (0 = none)", min=0)
     min_person_area_px: int = setting(400, "smallest silhouette kept, px", min=0)
@@ -35,6 +47,19 @@ class SkinConfig:
     threshold: float = setting(0.5, "skin probability threshold", min=0.0, max=1.0)
     max_iter: int = setting(200, "boosting iterations of the classifier", min=1)
     max_train_pixels: int = setting(200_000, "training pixels kept (random subset)", min=100)
+    balanced: bool = setting(
+        True,
+        "train on equal skin and non-skin pixel counts (True: skin is later intersected with "
+        "silhouettes, so recall matters more than the rare-skin prior); False: restore the "
+        "true skin prior with sample weights",
+    )
+    background_fraction: float = setting(
+        0.05,
+        "fraction of the background (non-person) pixels of training frames used as negatives; "
+        "person pixels (clothing, hair, objects) are all used",
+        min=0.0,
+        max=1.0,
+    )
 
 
 @dataclass(frozen=True)

@@ -131,9 +131,10 @@ def train_skin_classifier(
     if labels.all() or not labels.any():
         raise ValueError("labels must hold both skin (True) and non-skin (False) pixels")
     weights = np.ones(len(labels))
-    if len(labels) > cfg.max_train_pixels:
-        # skin is rare in frames: keep up to half the budget of each class, and weight the
-        # subsampled class so that the classifier still learns the true skin prior
+    if len(labels) > cfg.max_train_pixels or cfg.balanced:
+        # skin is rare in frames: keep up to half the budget of each class; either weight
+        # the subsampled classes equally (balanced) or so that the classifier still learns
+        # the true skin prior
         half = cfg.max_train_pixels // 2
         keep, w = [], []
         for idx in (np.flatnonzero(labels), np.flatnonzero(~labels)):
@@ -141,7 +142,11 @@ def train_skin_classifier(
             keep.append(chosen)
             w.append(np.full(len(chosen), len(idx) / len(chosen)))
         keep_idx = np.concatenate(keep)
-        pixels_bgr, labels, weights = pixels_bgr[keep_idx], labels[keep_idx], np.concatenate(w)
+        pixels_bgr, labels = pixels_bgr[keep_idx], labels[keep_idx]
+        weights = np.concatenate(w)
+        if cfg.balanced:
+            weights = np.where(labels, len(labels) / (2.0 * labels.sum()), 1.0)
+            weights[~labels] = len(labels) / (2.0 * (~labels).sum())
     clf = HistGradientBoostingClassifier(
         max_iter=cfg.max_iter,
         learning_rate=0.1,

@@ -44,7 +44,7 @@ from scipy.spatial.transform import Rotation
 
 from surveil import __version__
 from surveil.camera import Camera, Rig
-from surveil.datatypes import ActivityEvent, CandidateSet, Phase, TargetSnapshot
+from surveil.datatypes import ActivityEvent, CandidateSet, FrameResult, Phase, TargetSnapshot
 
 log = logging.getLogger(__name__)
 
@@ -487,3 +487,19 @@ class McapWriter:
         tb: TracebackType | None,
     ) -> None:
         self.close()
+
+
+class McapSink:
+    """A pipeline sink writing each FrameResult to an :class:`McapWriter`: targets,
+    candidates, and the events decided in that step (as soon as they are decided)."""
+
+    def __init__(self, writer: McapWriter) -> None:
+        self.writer = writer
+
+    def write(self, result: FrameResult) -> None:
+        self.writer.write_frame(result.frameset.t_ns, result.track.targets, result.candidates)
+        for ev in result.events:
+            self.writer.write_event(ev)
+
+    def close(self) -> None:
+        self.writer.close()

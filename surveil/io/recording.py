@@ -200,6 +200,8 @@ class Recording:
     spec : RecordingSpec
     rig : Rig
         The rig restricted to the recording's cameras, in the recording's order.
+    rig_path : Path | None
+        The rig file (per-camera skin models live beside it, see ``surveil train-skin``).
     camera_names : tuple[str, ...]
     fps : float
         Nominal rate.
@@ -226,8 +228,10 @@ class Recording:
         timestamp_paths: Mapping[str, Path | None],
         timestamps_ns: Mapping[str, np.ndarray],
         sizes: Mapping[str, tuple[int, int]],
+        rig_path: Path | None = None,
     ) -> None:
         self.path = path
+        self.rig_path = rig_path
         self.directory = path.parent
         self.spec = spec
         self.rig = rig
@@ -460,7 +464,7 @@ def open_recording(path: Path) -> Recording:
                 )
         video_paths[cam], ts_paths[cam] = video, ts_path
         timestamps[cam], sizes[cam] = ts, size
-    rec = Recording(toml_path, spec, rig, video_paths, ts_paths, timestamps, sizes)
+    rec = Recording(toml_path, spec, rig, video_paths, ts_paths, timestamps, sizes, rig_path)
     log.info("opened recording %s: %d cameras, %d frame sets", base, len(rig), rec.n_framesets)
     return rec
 
