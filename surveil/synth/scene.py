@@ -15,7 +15,6 @@ to date is reused instead of re-rendered.
 from __future__ import annotations
 
 import dataclasses
-
 import hashlib
 import logging
 import shutil
@@ -461,9 +460,7 @@ def _label_image(prims: list[Ellipsoid], winner: np.ndarray, r: CameraRenderer) 
 
 def _preview_frames(chor: Choreography, n_frames: int, fps: float, lead_s: float) -> list[int]:
     """Up to four frames: event climaxes first, else evenly spaced after the lead-in."""
-    picks = [
-        min(n_frames - 1, int(round((e.climax_ns / NS + lead_s) * fps))) for e in chor.events
-    ]
+    picks = [min(n_frames - 1, int(round((e.climax_ns / NS + lead_s) * fps))) for e in chor.events]
     picks = sorted(set(picks))
     if len(picks) > 4:
         picks = [picks[i] for i in np.linspace(0, len(picks) - 1, 4).round().astype(int)]
