@@ -457,7 +457,7 @@ class CarryAnalyser:
                 view = analyse_hand_view(img, obs, cam, pos[j], cfg)
                 if view is not None:
                     views[int(j)] = view
-            for j in _unambiguous_views(views):
+            for j in _unambiguous_views(views, self._frozen_circles(cam, pos, ~active)):
                 self._hands[ids[j]].window.push(t_ns, views[j].rho, views[j].pdf)
         fused = {tid: self._hands[tid].window.fused(t_ns, self._window_ns) for tid in ids}
         siblings = _siblings(hands) if cfg.subtract_clothing else {}
@@ -494,6 +494,17 @@ class CarryAnalyser:
                 state.window.clear()
                 log.debug("carry: hand %d separated; window restarted", tid)
 
+    def _frozen_circles(self, cam: Camera, pos: np.ndarray, frozen: np.ndarray) -> np.ndarray:
+        """(K, 3) ``(u, v, r)`` largest circles of the frozen hands that project into ``cam``
+        (they are not analysed, but what they hold must not leak into a neighbour)."""
+        if not frozen.any():
+            return np.zeros((0, 3))
+        px, depth = cam.project(pos[frozen])
+        seen = cam.in_image(px, depth)
+        r = cam.K[0, 0] * self.cfg.max_radius_m / np.maximum(depth, 1e-9)
+        r = np.clip(r, self.cfg.min_radius_px, self.cfg.max_radius_px)
+        return np.column_stack([px, r])[seen]
+
     def _estimate(
         self, target: TargetSnapshot, t_ns: int, pdf: np.ndarray, total_rho: float
     ) -> CarryEstimate:
@@ -518,13 +529,17 @@ class CarryAnalyser:
         )
 
 
-def _unambiguous_views(views: Mapping[int, HandView]) -> list[int]:
+def _unambiguous_views(
+    views: Mapping[int, HandView], obstacles: np.ndarray | None = None
+) -> list[int]:
     """Keys of the views that may feed their hand's window.
 
     A blob claimed by several hands belongs to the nearest one (the others are behind it);
     two hands whose circles intersect in the image both give nothing (one object must not be
-    counted in both hands, paper 004 section 7.3).
+    counted in both hands, paper 004 section 7.3), nor does a hand whose circle intersects one
+    of the ``obstacles`` ((K, 3) ``(u, v, r)`` circles of hands not analysed, e.g. frozen).
     """
+    obstacles = np.zeros((0, 3)) if obstacles is None else obstacles
     owner: dict[int, int] = {}
     for j, v in views.items():
         if v.blob_label not in owner or v.depth_m < views[owner[v.blob_label]].depth_m:
@@ -538,7 +553,8 @@ def _unambiguous_views(views: Mapping[int, HandView]) -> list[int]:
             for k in keep
             if k != j
         )
-        if not clash:
+        gaps = np.hypot(*(obstacles[:, :2] - vj.centre_px).T)
+        if not clash and not np.any(gaps < vj.radius_px + obstacles[:, 2]):
             out.append(j)
     return out
 
