@@ -1,7 +1,7 @@
 """Settings of the 3-D candidate stage (paper 004 eq. 19, 25-27; docs/candidates.md).
 
-The widths are provisional: chosen from the expected calibration and centroid errors, to be
-tuned on synthetic recordings with the benchmark.
+Defaults tuned with ``benchmarks/candidates_tune.py`` (a grid over the widths and the
+threshold on the demo, handshake and exchange scenes; docs/candidates.md, "Tuning").
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ class CandidateConfig:
         0.1, "p_o width (eq. 25): std of the relative-v difference, unitless", min=1e-6
     )
     sigma_gap_m: float = setting(
-        0.03, "p_t width (eq. 26): std of the half gap d between lines of sight, m", min=1e-6
+        0.02, "p_t width (eq. 26): std of the half gap d between lines of sight, m", min=1e-6
     )
     sigma_silhouette_px: float = setting(
         6.0, "p_b width (eq. 27): std of the distance outside a silhouette, px", min=1e-6
@@ -28,7 +28,7 @@ class CandidateConfig:
         0.1, "each of p_o, p_t, p_b must reach this (paper: 0.1)", min=0.0, max=1.0
     )
     prior_threshold: float = setting(
-        0.1, "p(Z) = p_o * p_t * p_b must reach this (paper: 0.1)", min=0.0, max=1.0
+        0.2, "p(Z) = p_o * p_t * p_b must reach this (paper: 0.1)", min=0.0, max=1.0
     )
     merge_radius_m: float = setting(
         0.08, "candidates closer than this merge into the stronger one, m", min=0.0

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import cv2
 import numpy as np
 import pytest
@@ -149,11 +151,12 @@ def test_pairs_of_one_point_merge_into_the_strongest_with_a_boosted_prior():
         _observation(cam, HEAD, rel_v=np.array([rv]))
         for cam, rv in zip(rig, (0.5, 0.6, 0.7), strict=True)
     ]
-    cs = make_candidates(obs, rig, CFG)
+    cfg = dataclasses.replace(CFG, prior_threshold=0.1)  # keep the weak pair (0, 2)
+    cs = make_candidates(obs, rig, cfg)
     strong = np.exp(-0.5)  # |dv| = 0.1 = sigma for pairs (0, 1) and (1, 2)
     weak = np.exp(-2.0)  # |dv| = 0.2 for pair (0, 2)
     assert cs.points_m.shape == (1, 3)
-    np.testing.assert_allclose(cs.prior, [strong + CFG.merge_boost * (strong + weak)])
+    np.testing.assert_allclose(cs.prior, [strong + cfg.merge_boost * (strong + weak)])
     np.testing.assert_array_equal(cs.cam_pairs, [[0, 1]])  # first of the tied strongest
     np.testing.assert_array_equal(cs.blob_pairs, [[0, 0]])
 
