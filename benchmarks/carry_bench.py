@@ -1,6 +1,6 @@
 """Benchmark the carried-object stage on ground-truth hand positions (synthetic recordings).
 
-    python benchmarks/carry_bench.py [--out out/bench_carry] [--masks none|skin|all]
+    python benchmarks/carry_bench.py [--out out/bench_carry] [--masks all|skin|none]
                                      [--set key=value ...] [NAME ...]
 
 Renders (or reuses) the scenarios (default: exchange, pick_place, handshake, self_exchange),
@@ -130,7 +130,7 @@ def bench_recording(rec_dir: Path, masks: str, cfg: CarryConfig, details: bool =
                 pred[i, j] = int(est[j].carrying)
                 if est[j].hue_deg is not None:
                     hue_pred[i, j] = est[j].hue_deg
-                frozen_any[i, j] = analyser._hands[j].frozen
+                frozen_any[i, j] = analyser.is_frozen(j)
                 if details:
                     e = est[j]
                     top = np.argsort(-e.hue_pdf)[:3] * (360.0 / cfg.hue_bins)
@@ -181,7 +181,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("names", nargs="*")
     parser.add_argument("--out", type=Path, default=ROOT / "out" / "bench_carry")
-    parser.add_argument("--masks", choices=("none", "skin", "all"), default="skin")
+    parser.add_argument("--masks", choices=("none", "skin", "all"), default="all")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     parser.add_argument("--details", action="store_true", help="print every scored hand-frame")
     args = parser.parse_args(argv)

@@ -409,6 +409,11 @@ class CarryAnalyser:
         """Forget every hand."""
         self._hands.clear()
 
+    def is_frozen(self, target_id: int) -> bool:
+        """Whether the hand's window is frozen by an overlap (False for unknown ids)."""
+        state = self._hands.get(target_id)
+        return state is not None and state.frozen
+
     def step(
         self,
         t_ns: int,

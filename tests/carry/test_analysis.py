@@ -168,12 +168,13 @@ def test_window_freezes_while_hands_overlap_and_restarts_after(camera):
     assert before.carrying
     # the hands meet; the box disappears from the image (it is being handed over)
     during = run(analyser, [bare] * 20, [a, b(near)], t0=5 * NS)[1]
+    assert analyser.is_frozen(1) and analyser.is_frozen(2)
     assert during.carrying and during.hue_deg == before.hue_deg
     assert during.t_ns == 24 * NS
     np.testing.assert_array_equal(during.hue_pdf, before.hue_pdf)
     # they separate: the window restarts, so the old box does not linger
     after = run(analyser, [bare] * 2, [a, b(apart)], t0=25 * NS)[1]
-    assert not after.carrying
+    assert not after.carrying and not analyser.is_frozen(1)
 
 
 def make_two_hands(camera, left_m, right_m):
