@@ -115,7 +115,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     print("|" + "---|" * (len(keys) + len(data)))
     default = tuple(getattr(CandidateConfig(), k) for k in keys)
-    for objective, values, per in rows[: args.top] + [r for r in rows if r[1] == default]:
+    for _objective, values, per in rows[: args.top] + [r for r in rows if r[1] == default]:
         cells = [f"{v:g}" for v in values] + [f"{r:.3f} / {f:.1f}" for r, f in per]
         mark = " (current default)" if values == default else ""
         print("| " + " | ".join(cells) + f" |{mark}")

@@ -106,7 +106,6 @@ def cmd_info(args: argparse.Namespace) -> ExitCode:
 
 
 def cmd_demo(args: argparse.Namespace) -> ExitCode:
-    from surveil.io.recording import describe_recording, open_recording
     from surveil.synth.scene import synthesise
 
     scenario, out = demo_recording_dir()
@@ -116,13 +115,29 @@ def cmd_demo(args: argparse.Namespace) -> ExitCode:
         scenario,
         out,
         preview=True,
-        overwrite=False,
+        overwrite=True,  # the demo folder is ours: re-render it when the generator changed
         on_progress=progress_bar("synth demo", args.quiet),
     )
     print(summary.describe())
-    print(describe_recording(open_recording(out)).format())
     print(f"contact sheet: {out / 'preview.png'}")
-    return ExitCode.OK
+    mcap = out.with_suffix(".mcap")
+    run_args = argparse.Namespace(
+        recording=out,
+        out=mcap,
+        rrd=None,
+        rules=None,
+        config=None,
+        seed=None,
+        max_frames=None,
+        quiet=args.quiet,
+    )
+    code = cmd_run(run_args)
+    print(
+        f"next: surveil eval {out} {mcap}   (score against the ground truth)\n"
+        f"      surveil events {mcap}        (the event timeline)\n"
+        f"      surveil review {mcap}        (review in Rerun)"
+    )
+    return code
 
 
 def cmd_eval(args: argparse.Namespace) -> ExitCode:

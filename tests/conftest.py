@@ -11,7 +11,7 @@ SMALL_SCENARIO = """
 [scene]
 name = "small"
 duration_s = 3.0
-empty_room_s = 1.0
+empty_room_s = 2.0
 fps = 15.0
 seed = 42
 

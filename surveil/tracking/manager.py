@@ -124,8 +124,8 @@ class MultiTargetTracker:
     ...               width=640, height=480, hfov_deg=60)
     >>> trk = MultiTargetTracker(TrackingConfig(), Rig((cam,)), seed=0)
     >>> cands = CandidateSet(np.array([[1.0, 0.0, 1.0]]), np.array([0.9]))
-    >>> [len(trk.step(i * 66_666_667, cands).targets) for i in range(3)]
-    [0, 1, 1]
+    >>> [len(trk.step(i * 66_666_667, cands).targets) for i in range(4)]
+    [0, 0, 1, 1]
     """
 
     def __init__(self, cfg: TrackingConfig, rig: Rig, *, seed: int) -> None:
@@ -608,6 +608,15 @@ class MultiTargetTracker:
                 partner = self._tracks[pairs[tr.id]]
                 if next_phase(partner.phase, Evidence(misses=partner.misses), lc) is Phase.LOST:
                     new = tr.phase
+            unclaimed_s = (t_ns - tr.born_ns) * 1e-9
+            if (
+                new is Phase.UNLABELLED
+                and tr.phase is Phase.UNLABELLED
+                and not tr.ever_labelled
+                and lc.retire_unclaimed_s > 0
+                and unclaimed_s > lc.retire_unclaimed_s
+            ):
+                new = Phase.UNINITIALISED
             plan[tr.id] = new
         # a combined pair leaves together (lost or separated)
         for tid, new in list(plan.items()):

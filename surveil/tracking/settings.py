@@ -77,7 +77,7 @@ class LifecycleConfig:
         max=1.0,
     )
     init_confirm_frames: int = setting(
-        2,
+        3,
         "consecutive frame sets an unexplained candidate must persist to start or re-acquire "
         "a tracker",
         min=1,
@@ -135,6 +135,13 @@ class LifecycleConfig:
     )
     retire_unlabelled_s: float = setting(
         0.6, "a never-labelled tracker lost for this long is retired, s", min=0.0
+    )
+    retire_unclaimed_s: float = setting(
+        1.0,
+        "a tracker never labelled this long after its start is retired: at most a head and two "
+        "hands belong to a person, so it tracks a ghost (mismatched blob pair, skin-coloured "
+        "clothing) or clutter; 0 = never, s",
+        min=0.0,
     )
 
 

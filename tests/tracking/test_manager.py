@@ -19,6 +19,10 @@ from surveil.tracking import LifecycleConfig, MultiTargetTracker, TrackingConfig
 DT_NS = 66_666_667  # 15 fps
 
 
+# these tests follow lone points (no person around them): never retire them as unclaimed
+LONE = TrackingConfig(lifecycle=LifecycleConfig(retire_unclaimed_s=0.0))
+
+
 @pytest.fixture(scope="module")
 def rig() -> Rig:
     corners = [(0.0, 0.0), (5.0, 0.0), (5.0, 4.0), (0.0, 4.0)]
@@ -85,7 +89,7 @@ def run(trk, frames, rng, **kw) -> list[TrackFrame]:
 
 
 def test_filter_converges_on_a_moving_point_with_clutter(rig, rng):
-    trk = MultiTargetTracker(TrackingConfig(), rig, seed=1)
+    trk = MultiTargetTracker(LONE, rig, seed=1)
     truth = [np.array([1.0 + 1.0 * i / 15, 2.0, 1.0 + 0.3 * np.sin(i / 5)]) for i in range(45)]
     out = run(trk, [[p] for p in truth], rng, noise_m=0.01, clutter=5)
     assert all(len(f.targets) == 1 for f in out[2:])  # weak clutter starts no tracker
@@ -98,7 +102,7 @@ def test_filter_converges_on_a_moving_point_with_clutter(rig, rng):
 
 
 def test_a_one_frame_ghost_starts_no_tracker(rig, rng):
-    trk = MultiTargetTracker(TrackingConfig(), rig, seed=0)
+    trk = MultiTargetTracker(LONE, rig, seed=0)
     frames = [[], [np.array([2.0, 2.0, 1.0])], [], []]
     assert all(not f.targets and not f.transitions for f in run(trk, frames, rng))
 
@@ -112,7 +116,7 @@ def two_people_frames(n: int, b_from: int):
 
 
 def test_two_people_are_labelled_and_grouped(rig, rng):
-    trk = MultiTargetTracker(TrackingConfig(), rig, seed=3)
+    trk = MultiTargetTracker(LONE, rig, seed=3)
     out = run(trk, two_people_frames(75, b_from=20), rng)
     a, b = body((2.0, 2.0), 0.0), body((3.2, 2.0), 180.0)
     labels = by_label(out[-1])
@@ -136,7 +140,7 @@ def test_disappear_reappear_keeps_id_and_label(rig, rng):
     frames = two_people_frames(80, b_from=0)
     for i in range(45, 53):  # p1's left hand hidden for 8 frames
         frames[i] = [p for k, p in enumerate(frames[i]) if k != 1]
-    trk = MultiTargetTracker(TrackingConfig(), rig, seed=4)
+    trk = MultiTargetTracker(LONE, rig, seed=4)
     out = run(trk, frames, rng)
     hand = next(s for s in out[44].targets if s.label == "p1/left_hand")
     mine = [
@@ -188,7 +192,7 @@ def clap_frames(cross: bool):
 @pytest.mark.parametrize("cross", [False, True])
 def test_join_and_separate_follow_the_angle_rule(rig, rng, cross):
     frames, sides, p = clap_frames(cross)
-    out = run(MultiTargetTracker(TrackingConfig(), rig, seed=6), frames, rng)
+    out = run(MultiTargetTracker(LONE, rig, seed=6), frames, rng)
     before = {s.label: s.target_id for s in out[34].targets}
     assert {"p1/left_hand", "p1/right_hand"} <= set(before)
     joins = [t for f in out for t in f.transitions if t.new is Phase.COMBINED]
@@ -213,7 +217,7 @@ def test_same_seed_same_output_and_skipped_frames(rig):
 
     def go(seed: int):
         rng = np.random.default_rng(9)
-        trk = MultiTargetTracker(TrackingConfig(), rig, seed=seed)
+        trk = MultiTargetTracker(LONE, rig, seed=seed)
         # frames 10-14 are skipped: the time step comes from t_ns
         return [
             trk.step(i * DT_NS, candidates(f, rng))
@@ -230,7 +234,7 @@ def test_same_seed_same_output_and_skipped_frames(rig):
             (t.target_id, t.new) for t in fb.transitions
         ]
     assert not np.array_equal(a[-1].particles_m, c[-1].particles_m)
-    trk = MultiTargetTracker(TrackingConfig(), rig, seed=1)
+    trk = MultiTargetTracker(LONE, rig, seed=1)
     first = [
         trk.step(i * DT_NS, candidates(f, np.random.default_rng(i)))
         for i, f in enumerate(frames[:5])
@@ -244,7 +248,7 @@ def test_same_seed_same_output_and_skipped_frames(rig):
 
 
 def test_bad_input_is_named(rig):
-    trk = MultiTargetTracker(TrackingConfig(), rig, seed=0)
+    trk = MultiTargetTracker(LONE, rig, seed=0)
     with pytest.raises(TypeError, match="candidates"):
         trk.step(0, np.zeros((3, 3)))
     trk.step(DT_NS, CandidateSet.empty())
@@ -271,7 +275,7 @@ def fake_observation(name: str, rel_v: list[float]) -> CameraObservation:
 
 
 def test_blob_rel_v_of_candidates(rig):
-    trk = MultiTargetTracker(TrackingConfig(), rig, seed=0)
+    trk = MultiTargetTracker(LONE, rig, seed=0)
     cands = CandidateSet(
         np.zeros((3, 3)),
         np.full(3, 0.9),
@@ -294,7 +298,7 @@ def test_step_is_fast_with_six_targets(rig, rng):
     import time
 
     frames = two_people_frames(40, b_from=0)
-    trk = MultiTargetTracker(TrackingConfig(), rig, seed=0)
+    trk = MultiTargetTracker(LONE, rig, seed=0)
     times = []
     for i, f in enumerate(frames):
         c = candidates(f, rng, clutter=6)
@@ -302,3 +306,16 @@ def test_step_is_fast_with_six_targets(rig, rng):
         trk.step(i * DT_NS, c)
         times.append(time.perf_counter() - t0)
     assert np.median(times[10:]) < 0.010  # generous: shared, slow CI machines
+
+
+def test_a_tracker_never_labelled_is_retired_as_unclaimed(rig, rng):
+    """A lone point that never becomes a head or a person's hand is a ghost: retired after
+    retire_unclaimed_s, with an unlabelled -> uninitialised transition."""
+    cfg = TrackingConfig(lifecycle=LifecycleConfig(retire_unclaimed_s=1.0))
+    trk = MultiTargetTracker(cfg, rig, seed=2)
+    frames = [[np.array([2.0, 2.0, 0.9])]] * 30  # a still point at hand height, no head
+    out = run(trk, frames, rng, noise_m=0.005)
+    alive = [len(f.targets) for f in out]
+    retired = [tr for f in out for tr in f.transitions if tr.new is Phase.UNINITIALISED]
+    assert alive[5] == 1 and retired
+    assert (retired[0].t_ns - out[0].t_ns) * 1e-9 > 1.0

@@ -1,0 +1,65 @@
+"""The whole pipeline on the small synthetic recording: output contract, accuracy, determinism."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from surveil.activity import load_rules
+from surveil.errors import ConfigError
+from surveil.eval.score import EvalConfig, evaluate
+from surveil.io.mcap_reader import read_run
+from surveil.io.mcap_writer import McapSink, McapWriter
+from surveil.io.recording import open_recording
+from surveil.pipeline import Pipeline, PipelineConfig, load_pipeline_config, run_recording
+
+
+def _run(recording_dir, out, seed=0):
+    rec = open_recording(recording_dir)
+    pipeline = Pipeline(PipelineConfig(seed=seed), rec.rig, load_rules())
+    sink = McapSink(McapWriter(out, rec.rig, start_time_ns=rec.start_time_ns))
+    summary = run_recording(rec.framesets, rec.n_framesets, pipeline, [sink])
+    return summary, read_run(out)
+
+
+@pytest.fixture(scope="module")
+def first_run(small_recording, tmp_path_factory):
+    return _run(small_recording, tmp_path_factory.mktemp("run") / "a.mcap")
+
+
+def test_run_writes_every_frame_set_and_finds_both_people(first_run, small_recording):
+    summary, run = first_run
+    rec = open_recording(small_recording)
+    assert summary.n_framesets == rec.n_framesets == run.n_frames
+    assert run.complete and "/events" in run.channels
+    assert len(summary.persons) >= 2
+    stages = summary.median_ms()
+    assert {"background", "skin", "blobs", "candidates", "tracking", "carry"} <= set(stages)
+
+
+def test_run_tracks_heads_and_hands_against_the_ground_truth(first_run, small_recording, tmp_path):
+    _, run = first_run
+    report = evaluate(small_recording, run.path, EvalConfig())
+    t = report.targets
+    # 320x240 frames (hands ~6 px wide): a coarse bar; the full-size figures are benchmarks
+    assert t.recall > 0.6
+    assert t.head_error_mm_mean < 120 and t.hand_error_mm_median < 120
+
+
+def test_same_seed_gives_the_same_output(first_run, small_recording, tmp_path):
+    _, a = first_run
+    _, b = _run(small_recording, tmp_path / "b.mcap")
+    np.testing.assert_array_equal(a.target_pos_m, b.target_pos_m)
+    np.testing.assert_array_equal(a.target_label, b.target_label)
+    assert a.events == b.events
+
+
+def test_config_file_overrides_and_rejects_unknown_keys(tmp_path):
+    good = tmp_path / "run.toml"
+    good.write_text("seed = 5\n[tracking.filter]\nn_particles = 120\n")
+    cfg = load_pipeline_config(good)
+    assert cfg.seed == 5 and cfg.tracking.filter.n_particles == 120
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[candidates]\nsigma_gap = 0.02\n")
+    with pytest.raises(ConfigError, match=r"bad.toml: candidates.sigma_gap is not a known key"):
+        load_pipeline_config(bad)
