@@ -228,6 +228,10 @@ def load_ground_truth(recording_dir: Path) -> GroundTruth:
     )
     for r in obj_rows:
         frame_t.setdefault(int(r["frame"]), int(r["t_ns"]))
+    # frames with no row at all (an empty room: nothing to list) still exist
+    if isinstance(meta.get("n_frames"), int) and float(meta.get("fps", 0)) > 0:
+        for k in range(meta["n_frames"]):
+            frame_t.setdefault(k, round(k * 1e9 / float(meta["fps"])))
     frames = np.array(sorted(frame_t), dtype=np.int64)
     t_ns = np.array([frame_t[f] for f in frames], dtype=np.int64)
     f_idx = {int(f): i for i, f in enumerate(frames)}

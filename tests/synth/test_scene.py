@@ -47,6 +47,8 @@ def test_empty_room_lead_in_has_no_people(gt):
     assert np.isnan(gt.positions_m[lead]).all() and not gt.visible[lead].any()
     assert np.isfinite(gt.positions_m[~lead]).all()
     assert min(ev.start_ns for ev in gt.events) >= 2_000_000_000
+    # the empty frames are still frames of the ground truth (scored: no target expected)
+    np.testing.assert_array_equal(gt.frames, np.arange(gt.meta["n_frames"]))
 
 
 def test_rendered_skin_pixels_look_like_skin(small_recording, gt):
