@@ -88,8 +88,16 @@ class BackgroundModel:
             raise ValueError(f"shape must be (H, W) with positive sizes, got {shape}")
         self.cfg = cfg
         self.shape = (int(shape[0]), int(shape[1]))
-        self._open = _ellipse(cfg.open_px)
-        self._close = _ellipse(cfg.close_px)
+        scale = cfg.model_scale
+        self._small_size = None
+        if scale < 1.0:
+            self._small_size = (
+                max(1, round(self.shape[1] * scale)),
+                max(1, round(self.shape[0] * scale)),
+            )
+        # kernels are in full-resolution pixels: scale them with the frame
+        self._open = _ellipse(round(cfg.open_px * scale))
+        self._close = _ellipse(round(cfg.close_px * scale) | 1 if cfg.close_px else 0)
         self.reset()
 
     def reset(self) -> None:
@@ -116,11 +124,28 @@ class BackgroundModel:
         """
         require_shape("bgr", bgr, (*self.shape, 3), np.uint8)
         rate = self.cfg.learning_rate_initial if self.learning else self.cfg.learning_rate
-        raw = self._mog.apply(bgr, learningRate=rate)
+        small = bgr
+        if self._small_size is not None:
+            small = cv2.resize(bgr, self._small_size, interpolation=cv2.INTER_AREA)
+        raw = self._mog.apply(small, learningRate=rate)
         self.n_frames += 1
         fg = (raw == FOREGROUND).view(np.uint8)
         if self._open is not None:
             fg = cv2.morphologyEx(fg, cv2.MORPH_OPEN, self._open)
         if self._close is not None:
             fg = cv2.morphologyEx(fg, cv2.MORPH_CLOSE, self._close)
-        return silhouettes_from_mask(fg, self.cfg.min_person_area_px)
+        if self._small_size is None:
+            return silhouettes_from_mask(fg, self.cfg.min_person_area_px)
+        # components and distances on the small mask too (they cost more than MOG2 at full
+        # size), then scaled back to frame pixels
+        sx = self.shape[1] / self._small_size[0]
+        sy = self.shape[0] / self._small_size[1]
+        small = silhouettes_from_mask(fg, round(self.cfg.min_person_area_px / (sx * sy)))
+        size = self.shape[::-1]
+        return Silhouettes(
+            cv2.resize(small.labels, size, interpolation=cv2.INTER_NEAREST),
+            small.top_v_px * sy,
+            (small.bottom_v_px + 1.0) * sy - 1.0,
+            cv2.resize(small.dist_outside_px, size, interpolation=cv2.INTER_LINEAR)
+            * np.float32(0.5 * (sx + sy)),
+        )
