@@ -67,6 +67,23 @@ def extract_blobs(
     )
     areas = stats[1:, cv2.CC_STAT_AREA].astype(np.int64)
     ok = np.flatnonzero(areas >= max(cfg.min_blob_area_px, 1))
+    if cfg.max_blob_area_rel > 0 and len(ok) and silhouettes.n:
+        # a head covers ~1 % of (silhouette height)^2; much larger skin-coloured regions are
+        # clothing (beige shirts, khaki trousers) that would crowd the real limbs out of the
+        # n_keep largest
+        c = np.rint(centroids[ok + 1]).astype(np.int64)
+        c[:, 0] = np.clip(c[:, 0], 0, shape[1] - 1)
+        c[:, 1] = np.clip(c[:, 1], 0, shape[0] - 1)
+        s_at = sil[c[:, 1], c[:, 0]]
+        heights = np.zeros(len(ok))
+        on = s_at > 0
+        heights[on] = (
+            np.asarray(silhouettes.bottom_v_px)[s_at[on] - 1]
+            - np.asarray(silhouettes.top_v_px)[s_at[on] - 1]
+            + 1.0
+        )
+        too_big = on & (areas[ok] > cfg.max_blob_area_rel * heights**2)
+        ok = ok[~too_big]
     n_h = max(n_people_hint if n_people_hint is not None else silhouettes.n, 1)
     n_keep = math.ceil(cfg.blob_excess * 3 * n_h)
     order = ok[np.argsort(-areas[ok], kind="stable")][:n_keep]  # 0-based blob index

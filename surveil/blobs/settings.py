@@ -74,5 +74,11 @@ class BlobConfig:
     """Skin blobs inside silhouettes (section 6.2)."""
 
     min_blob_area_px: int = setting(20, "smallest blob kept, px", min=0)
+    max_blob_area_rel: float = setting(
+        0.03,
+        "drop blobs larger than this times the square of their silhouette's height (a head "
+        "is ~0.01): skin-coloured clothing, not a head or hand (0 = keep all)",
+        min=0.0,
+    )
     blob_excess: float = setting(1.5, "lambda: keep ceil(lambda * 3 * N_h) largest", min=1.0)
     silhouette_dilate_px: int = setting(3, "grow silhouettes by this radius, px", min=0)

@@ -43,10 +43,19 @@ def _silhouette_prior(
     rig: Rig,
     by_cam: dict[int, CameraObservation],
     sigma_px: float,
+    drop_worst: bool = True,
 ) -> np.ndarray:
     """p_b (eq. 27): product over observed cameras Z projects into of a Gaussian in the
-    distance (px) of Z's projection to the nearest silhouette pixel."""
-    p_b = np.ones(len(points_m))
+    distance (px) of Z's projection to the nearest silhouette pixel.
+
+    With ``drop_worst`` (a deviation from the paper, for robustness) the single lowest term
+    is left out wherever three or more cameras see Z: one camera whose background model
+    failed (started late with people in view, a sudden light change) would otherwise veto
+    every candidate in the room.
+    """
+    log_pb = np.zeros(len(points_m))
+    worst = np.zeros(len(points_m))  # the lowest log term
+    n_seen = np.zeros(len(points_m), np.int64)
     for m, obs in by_cam.items():
         cam = rig.cameras[m]
         px, depth = cam.project(points_m)
@@ -61,8 +70,14 @@ def _silhouette_prior(
         else:
             uv = np.rint(px[inside]).astype(np.intp)
             dist = dist_img[np.clip(uv[:, 1], 0, h - 1), np.clip(uv[:, 0], 0, w - 1)]
-        p_b[inside] *= _gauss(dist.astype(np.float64), sigma_px)
-    return p_b
+        term = -0.5 * (dist.astype(np.float64) / sigma_px) ** 2
+        log_pb[inside] += term
+        worst[inside] = np.minimum(worst[inside], term)
+        n_seen[inside] += 1
+    if drop_worst:
+        robust = n_seen >= 3
+        log_pb[robust] -= worst[robust]
+    return np.exp(log_pb)
 
 
 def _merge(
@@ -192,7 +207,9 @@ def make_candidates(
         return _empty()
     ia, ib, points, half_gap = ia[keep], ib[keep], points[keep], half_gap[keep]
     # eq. 27 (silhouette consistency) on the survivors only
-    p_b = _silhouette_prior(points, rig, by_cam, cfg.sigma_silhouette_px)
+    p_b = _silhouette_prior(
+        points, rig, by_cam, cfg.sigma_silhouette_px, cfg.silhouette_drop_worst
+    )
     prior = p_o[keep] * p_t[keep] * p_b  # eq. 19
     ok = (p_b >= cfg.term_threshold) & (prior >= cfg.prior_threshold)
     ia, ib, points, half_gap, prior = ia[ok], ib[ok], points[ok], half_gap[ok], prior[ok]

@@ -17,6 +17,7 @@ from surveil.recon.settings import CandidateConfig
 
 W, H = 320, 240
 CFG = CandidateConfig()
+PAPER = CandidateConfig(silhouette_drop_worst=False)  # p_b over every camera (eq. 27)
 
 
 def _rig(n: int = 4) -> Rig:
@@ -132,8 +133,8 @@ def test_point_projecting_outside_a_silhouette_makes_p_b_small():
         _observation(rig.cameras[1], HEAD),
         _observation(cam2, np.zeros((0, 3)), silhouette_at_m=elsewhere),
     ]
-    assert len(make_candidates(obs, rig, CFG).points_m) == 0
-    lenient = CandidateConfig(term_threshold=0.0, prior_threshold=0.0)
+    assert len(make_candidates(obs, rig, PAPER).points_m) == 0
+    lenient = CandidateConfig(term_threshold=0.0, prior_threshold=0.0, silhouette_drop_worst=False)
     cs = make_candidates(obs, rig, lenient)
     u, v = np.rint(cam2.project(HEAD)[0][0]).astype(int)
     dist = float(obs[2].silhouettes.dist_outside_px[v, u])
@@ -142,7 +143,11 @@ def test_point_projecting_outside_a_silhouette_makes_p_b_small():
         cs.prior, [np.exp(-0.5 * (dist / CFG.sigma_silhouette_px) ** 2)], rtol=1e-9
     )
     # without cam2's observation it is not consulted and the candidate is perfect
-    np.testing.assert_allclose(make_candidates(obs[:2], rig, CFG).prior, [1.0])
+    np.testing.assert_allclose(make_candidates(obs[:2], rig, PAPER).prior, [1.0])
+
+    # the robust default leaves out the one camera that disagrees when three see the point
+    robust = CandidateConfig(silhouette_drop_worst=True)
+    assert len(make_candidates(obs, rig, robust).points_m) == 1
 
 
 def test_pairs_of_one_point_merge_into_the_strongest_with_a_boosted_prior():
