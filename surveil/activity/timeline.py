@@ -66,21 +66,10 @@ def event_json(ev: ActivityEvent, colour_name: Callable[[float], str]) -> str:
     >>> json.loads(event_json(ev, lambda h: "blue"))["object_colour"]
     'blue'
     """
-    return json.dumps(
-        {
-            "activity": ev.activity,
-            "start_ns": ev.start_ns,
-            "climax_ns": ev.climax_ns,
-            "end_ns": ev.end_ns,
-            "actors": list(ev.actors),
-            "persons": list(ev.persons),
-            "from": ev.from_actor,
-            "to": ev.to_actor,
-            "object_hue_deg": ev.object_hue_deg,
-            "object_colour": (
-                None if ev.object_hue_deg is None else colour_name(ev.object_hue_deg)
-            ),
-            "confidence": ev.confidence,
-            "rule": ev.rule,
-        }
-    )
+    from surveil.io.ground_truth import event_to_dict
+
+    record = event_to_dict(ev)  # the one mapping of an event's fields to JSON keys
+    record.pop("object")
+    record["object_colour"] = None if ev.object_hue_deg is None else colour_name(ev.object_hue_deg)
+    record.update(confidence=ev.confidence, rule=ev.rule)
+    return json.dumps(record)
