@@ -37,3 +37,14 @@ def test_train_skin_writes_one_model_per_camera(small_recording, tmp_path, capsy
     assert [p.stem for p in models] == ["cam0", "cam1", "cam2", "cam3"]
     model = load_skin_model(models[0])
     assert model.meta["camera"] == "cam0" and 0.0 < model.lut.mean() < 0.6
+
+
+def test_run_also_writes_a_rerun_review_file(small_recording, tmp_path, capsys):
+    from surveil.viz.viewer import verify
+
+    rrd = tmp_path / "out.rrd"
+    code = main(["-q", "run", str(small_recording), "--out", str(tmp_path / "o.mcap"),
+                 "--rrd", str(rrd), "--max-frames", "40"])  # fmt: skip
+    assert code == ExitCode.OK
+    assert rrd.is_file() and rrd.stat().st_size > 10_000
+    verify(rrd)  # `rerun rrd verify` accepts it (raises otherwise)
