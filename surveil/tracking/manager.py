@@ -613,6 +613,7 @@ class MultiTargetTracker:
                 new is Phase.UNLABELLED
                 and tr.phase is Phase.UNLABELLED
                 and not tr.ever_labelled
+                and tr.person == 0  # a hand attached to a person, waiting for its side
                 and lc.retire_unclaimed_s > 0
                 and unclaimed_s > lc.retire_unclaimed_s
             ):
