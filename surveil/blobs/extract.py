@@ -49,7 +49,8 @@ def extract_blobs(
     >>> sk = np.zeros((10, 10), bool); sk[2:4, 2:4] = True
     >>> lab = np.zeros((10, 10), np.int32); lab[1:9, 1:6] = 1
     >>> sil = Silhouettes(lab, np.array([1.0]), np.array([8.0]), np.zeros((10, 10), np.float32))
-    >>> b = extract_blobs(sk, sil, BlobConfig(min_blob_area_px=1, silhouette_dilate_px=0))
+    >>> cfg = BlobConfig(min_blob_area_px=1, silhouette_dilate_px=0, max_blob_area_rel=0.0)
+    >>> b = extract_blobs(sk, sil, cfg)
     >>> b.centroids_px.tolist(), b.areas_px.tolist(), b.rel_v.round(3).tolist()
     ([[2.5, 2.5]], [4], [0.214])
     """
