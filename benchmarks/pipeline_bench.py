@@ -18,7 +18,6 @@ from surveil.activity import load_rules
 from surveil.eval.score import EvalConfig, evaluate
 from surveil.io.mcap_writer import McapSink, McapWriter
 from surveil.io.recording import open_recording
-from surveil.io.skin_model import load_camera_skin_models
 from surveil.pipeline import Pipeline, PipelineConfig, run_recording
 from surveil.synth.scene import synthesise
 
@@ -34,12 +33,7 @@ def bench(name: str, out_dir: Path, seed: int) -> tuple[object, object, float]:
     synthesise(ROOT / "recordings" / f"{name}.toml", rec_dir)
     rec = open_recording(rec_dir)
     mcap = out_dir / f"{name}.mcap"
-    pipeline = Pipeline(
-        PipelineConfig(seed=seed),
-        rec.rig,
-        load_rules(),
-        load_camera_skin_models(rec.rig_path, rec.camera_names),
-    )
+    pipeline = Pipeline.for_recording(rec, PipelineConfig(seed=seed), load_rules())
     sink = McapSink(McapWriter(mcap, rec.rig, start_time_ns=rec.start_time_ns))
     summary = run_recording(rec.framesets, rec.n_framesets, pipeline, [sink])
     report = evaluate(rec_dir, mcap, EvalConfig())

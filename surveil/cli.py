@@ -121,16 +121,9 @@ def cmd_demo(args: argparse.Namespace) -> ExitCode:
     print(summary.describe())
     print(f"contact sheet: {out / 'preview.png'}")
     mcap = out.with_suffix(".mcap")
-    run_args = argparse.Namespace(
-        recording=out,
-        out=mcap,
-        rrd=None,
-        rules=None,
-        config=None,
-        seed=None,
-        max_frames=None,
-        quiet=args.quiet,
-    )
+    # the run command's own defaults, not a copy of them
+    run_args = build_parser().parse_args(["run", str(out), "--out", str(mcap)])
+    run_args.quiet = args.quiet
     code = cmd_run(run_args)
     print(
         f"next: surveil eval {out} {mcap}   (score against the ground truth)\n"
@@ -158,7 +151,6 @@ def cmd_run(args: argparse.Namespace) -> ExitCode:
     from surveil.activity import load_rules
     from surveil.io.mcap_writer import McapSink, McapWriter
     from surveil.io.recording import open_recording
-    from surveil.io.skin_model import load_camera_skin_models
     from surveil.pipeline import (
         Pipeline,
         config_as_dict,
@@ -174,14 +166,15 @@ def cmd_run(args: argparse.Namespace) -> ExitCode:
     out = args.out or args.recording.with_suffix(".mcap")
     if out.is_dir():
         raise SurveilError(f"--out {out} is a directory; give a file name ending in .mcap")
-    skin_models = load_camera_skin_models(rec.rig_path, rec.camera_names)
-    pipeline = Pipeline(cfg, rec.rig, rules, skin_models)
+    pipeline = Pipeline.for_recording(rec, cfg, rules)
     metadata = {
         "run": {
             "recording": str(Path(args.recording).resolve()),
             "config": json.dumps(config_as_dict(cfg), sort_keys=True),
             "rules": json.dumps(rules.to_metadata(), sort_keys=True),
-            "skin_models": json.dumps({c: m.meta for c, m in skin_models.items()}, default=str),
+            "skin_models": json.dumps(
+                {c: m.meta for c, m in pipeline.skin_models.items()}, default=str
+            ),
         }
     }
     sinks: list = [
@@ -193,11 +186,10 @@ def cmd_run(args: argparse.Namespace) -> ExitCode:
         sinks.append(
             RerunSink(args.rrd, rec.rig, rec.camera_names, start_time_ns=rec.start_time_ns)
         )
-    stop = None if args.max_frames is None else args.max_frames
-    n = rec.count_framesets(0, stop)
+    stop = args.max_frames
     summary = run_recording(
         lambda: rec.framesets(0, stop),
-        n,
+        rec.count_framesets(0, stop),
         pipeline,
         sinks,
         on_progress=progress_bar(f"run {args.recording.name}", args.quiet),

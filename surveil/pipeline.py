@@ -36,6 +36,7 @@ from surveil.datatypes import (
     Limb,
     Phase,
 )
+from surveil.io.recording import Recording
 from surveil.recon.candidates import make_candidates
 from surveil.recon.settings import CandidateConfig
 from surveil.tracking import MultiTargetTracker, TrackingConfig
@@ -114,6 +115,15 @@ class Pipeline:
         self.carry = CarryAnalyser(cfg.carry, rig)
         self.activity = ActivityEngine(rules)
         self._n_heads = 0
+
+    @classmethod
+    def for_recording(cls, recording: Recording, cfg: PipelineConfig, rules: RuleSet) -> Pipeline:
+        """A pipeline for ``recording``'s rig, with the per-camera skin models saved beside
+        that rig (``surveil train-skin``) and the default model elsewhere."""
+        from surveil.io.skin_model import load_camera_skin_models
+
+        skin = load_camera_skin_models(recording.rig_path, recording.camera_names)
+        return cls(cfg, recording.rig, rules, skin)
 
     def reset(self) -> None:
         self.backgrounds.clear()
