@@ -41,8 +41,11 @@ def test_run_tracks_heads_and_hands_against_the_ground_truth(first_run, small_re
     _, run = first_run
     report = evaluate(small_recording, run.path, EvalConfig())
     t = report.targets
-    # 320x240 frames (hands ~6 px wide): a coarse bar; the full-size figures are benchmarks
-    assert t.recall > 0.6
+    # 320x240 frames (hands ~6 px wide): a coarse bar; the full-size figures are benchmarks.
+    # Explaining ghost candidates away trades recall here (0.56 -> 0.49, CLEAR MOT matching)
+    # for far fewer false targets (1.9 -> 0.3 per frame): both are held.
+    assert t.recall > 0.45
+    assert t.false_targets_per_frame < 1.0
     assert t.head_error_mm_mean < 120 and t.hand_error_mm_median < 120
 
 

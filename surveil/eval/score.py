@@ -274,6 +274,52 @@ def align_frames(truth_t_ns: np.ndarray, pred_t_ns: np.ndarray, fps: float) -> n
     return out
 
 
+def _persistent_assignment(
+    dist: np.ndarray,
+    tracker_ids: np.ndarray,
+    true_idx: np.ndarray,
+    previous: dict[int, int],
+    cfg: EvalConfig,
+) -> tuple[np.ndarray, np.ndarray]:
+    """One frame's matching as CLEAR MOT defines it (Bernardin and Stiefelhagen 2008): a true
+    limb keeps the tracker it was last matched to while that tracker is within the gate; the
+    rest are matched by :func:`gated_assignment`. Without the first step, two trackers near one
+    limb would trade the match back and forth and count a switch every time.
+
+    Parameters
+    ----------
+    dist : (R, C) float -- distances, predicted rows x present true limbs, m
+    tracker_ids : (R,) int -- tracker id of each predicted row
+    true_idx : (C,) int -- label index of each present true limb
+    previous : true label index -> tracker id of its last match
+    cfg : EvalConfig
+
+    Returns
+    -------
+    rows, cols : (M,) int64, sorted by row
+
+    >>> d = np.array([[0.05, 0.9], [0.02, 0.9]])
+    >>> _persistent_assignment(d, np.array([7, 8]), np.array([0, 1]), {0: 7}, EvalConfig())
+    (array([0]), array([0]))
+    >>> _persistent_assignment(d, np.array([7, 8]), np.array([0, 1]), {}, EvalConfig())
+    (array([1]), array([0]))
+    """
+    row_of = {int(t): i for i, t in enumerate(tracker_ids)}
+    kept_r, kept_c = [], []
+    for c, j in enumerate(true_idx):
+        r = row_of.get(previous.get(int(j), -1))
+        if r is not None and dist[r, c] <= cfg.gate_m:
+            kept_r.append(r)
+            kept_c.append(c)
+    free_r = np.setdiff1d(np.arange(dist.shape[0]), kept_r)
+    free_c = np.setdiff1d(np.arange(dist.shape[1]), kept_c)
+    r, c = gated_assignment(dist[np.ix_(free_r, free_c)], cfg.gate_m)
+    rows = np.concatenate([np.array(kept_r, dtype=np.int64), free_r[r]])
+    cols = np.concatenate([np.array(kept_c, dtype=np.int64), free_c[c]])
+    order = np.argsort(rows, kind="stable")
+    return rows[order].astype(np.int64), cols[order].astype(np.int64)
+
+
 @dataclass(frozen=True, slots=True)
 class _Matches:
     """Matched (true limb, predicted row) pairs over all scored frames, in frame order."""
@@ -294,6 +340,7 @@ def _match_targets(
     gf, tj, pr = [], [], []
     scored = []
     n_countable = n_found = n_false = 0
+    previous: dict[int, int] = {}  # true limb -> tracker id it was last matched to
     for k in np.argsort(aligned, kind="stable"):
         g = int(aligned[k])
         if g < 0:
@@ -309,9 +356,13 @@ def _match_targets(
         countable = n_views[g, present] >= cfg.min_views
         if rows.size and present.size:
             dist = cdist(run.target_pos_m[rows], true_pos[present])
-            r, c = gated_assignment(dist, cfg.gate_m)
+            r, c = _persistent_assignment(dist, run.target_tracker[rows], present, previous, cfg)
         else:
             r = c = np.zeros(0, dtype=np.int64)
+        previous.update(
+            (int(present[ci]), int(run.target_tracker[rows[ri]]))
+            for ri, ci in zip(r, c, strict=True)
+        )
         order = np.argsort(c)
         r, c = r[order], c[order]
         gf.append(np.full(len(r), g, dtype=np.int64))

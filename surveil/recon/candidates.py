@@ -106,6 +106,72 @@ def _merge(
     return order[np.array(kept, dtype=np.intp)], np.array(kept_prior)
 
 
+def _view_support(
+    points_m: np.ndarray,
+    cam_pairs: np.ndarray,
+    blob_pairs: np.ndarray,
+    rig: Rig,
+    by_cam: dict[int, CameraObservation],
+    radius_px: float,
+) -> np.ndarray:
+    """(K, M) int: per candidate and rig camera, the blob whose centroid is nearest to the
+    candidate's projection if within ``radius_px`` (-1: none, or the camera did not see it).
+    The candidate's own two blobs always support it."""
+    k = len(points_m)
+    support = np.full((k, len(rig.cameras)), -1, dtype=np.int64)
+    for m, obs in by_cam.items():
+        if len(obs.blobs) == 0:
+            continue
+        px, depth = rig.cameras[m].project(points_m)
+        inside = rig.cameras[m].in_image(px, depth)
+        dist = np.linalg.norm(px[:, None] - obs.blobs.centroids_px[None], axis=2)
+        nearest = dist.argmin(axis=1)
+        ok = inside & (dist[np.arange(k), nearest] <= radius_px)
+        support[ok, m] = nearest[ok]
+    rows = np.arange(k)
+    support[rows, cam_pairs[:, 0]] = blob_pairs[:, 0]
+    support[rows, cam_pairs[:, 1]] = blob_pairs[:, 1]
+    return support
+
+
+def explain_away(support: np.ndarray, prior: np.ndarray) -> np.ndarray:
+    """(K,) bool: the candidates kept when each blob may explain one 3-D point.
+
+    Candidates are visited best first (most supporting views, then highest prior). One that
+    reuses a blob already claimed by a better candidate and has fewer than two unclaimed
+    supporting blobs is a *ghost*: two lines of sight of different limbs that happen to
+    cross (or a second, weaker copy of a kept point); the others are kept and claim their
+    blobs. A limb hidden behind another in one view still has its own blobs in two others.
+
+    Parameters
+    ----------
+    support : (K, M) int -- blob index per camera supporting each candidate, -1 none
+        (:func:`_view_support`)
+    prior : (K,) float
+
+    Examples
+    --------
+    Two true points seen by three cameras, and a ghost pairing camera 0's blob 0 with
+    camera 1's blob 1:
+
+    >>> support = np.array([[0, 0, 0], [1, 1, 1], [0, 1, -1]])
+    >>> explain_away(support, np.array([0.9, 0.8, 0.95])).tolist()
+    [True, True, False]
+    """
+    n_views = (support >= 0).sum(axis=1)
+    order = np.lexsort((-prior, -n_views))
+    claimed: set[tuple[int, int]] = set()
+    keep = np.zeros(len(prior), dtype=bool)
+    for k in order:
+        views = [(m, int(b)) for m, b in enumerate(support[k]) if b >= 0]
+        fresh = [v for v in views if v not in claimed]
+        if len(fresh) < 2 and len(fresh) < len(views):
+            continue
+        keep[k] = True
+        claimed.update(views)
+    return keep
+
+
 def make_candidates(
     observations: Sequence[CameraObservation], rig: Rig, cfg: CandidateConfig
 ) -> CandidateSet:
@@ -217,14 +283,27 @@ def make_candidates(
         return _empty()
 
     kept, prior = _merge(points, prior, cfg.merge_radius_m, cfg.merge_boost)
-    log.debug(
-        "candidates: %d pairs, %d pass the prior, %d after merging", len(keep), ok.size, len(kept)
-    )
+    n_merged = len(kept)
     ia, ib = ia[kept], ib[kept]
+    points, half_gap = points[kept], half_gap[kept]
+    cam_pairs = np.column_stack([cam_all[ia], cam_all[ib]])
+    blob_pairs = np.column_stack([blob_all[ia], blob_all[ib]])
+    if cfg.explain_away:
+        support = _view_support(points, cam_pairs, blob_pairs, rig, by_cam, cfg.support_radius_px)
+        real = explain_away(support, prior)
+        points, prior, half_gap = points[real], prior[real], half_gap[real]
+        cam_pairs, blob_pairs = cam_pairs[real], blob_pairs[real]
+    log.debug(
+        "candidates: %d pairs, %d pass the prior, %d after merging, %d after explaining away",
+        len(keep),
+        int(ok.sum()),
+        n_merged,
+        len(points),
+    )
     return CandidateSet(
-        points[kept],
+        points,
         prior,
-        half_gap_m=half_gap[kept],
-        cam_pairs=np.column_stack([cam_all[ia], cam_all[ib]]),
-        blob_pairs=np.column_stack([blob_all[ia], blob_all[ib]]),
+        half_gap_m=half_gap,
+        cam_pairs=cam_pairs,
+        blob_pairs=blob_pairs,
     )

@@ -137,10 +137,11 @@ class LifecycleConfig:
         0.6, "a never-labelled tracker lost for this long is retired, s", min=0.0
     )
     retire_unclaimed_s: float = setting(
-        1.0,
+        0.0,
         "a tracker never labelled this long after its start is retired: at most a head and two "
         "hands belong to a person, so it tracks a ghost (mismatched blob pair, skin-coloured "
-        "clothing) or clutter; 0 = never, s",
+        "clothing) or clutter; 0 = never (the default since the candidate stage explains "
+        "ghosts away: retiring then cost more real hands than ghosts), s",
         min=0.0,
     )
 

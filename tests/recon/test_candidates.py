@@ -12,7 +12,7 @@ from surveil.camera import Camera, Rig, look_at
 from surveil.config import from_table
 from surveil.datatypes import BlobSet, CameraObservation, CandidateSet, Silhouettes
 from surveil.errors import ConfigError
-from surveil.recon.candidates import _merge, make_candidates
+from surveil.recon.candidates import _merge, explain_away, make_candidates
 from surveil.recon.settings import CandidateConfig
 
 W, H = 320, 240
@@ -97,6 +97,38 @@ def test_three_targets_seen_by_four_cameras_are_the_strongest_candidates():
     # ghosts of two nearly coplanar views (cam0, cam3) may survive, but weakly
     ghosts = cs.blob_pairs[3:]
     assert np.all(ghosts[:, 0] != ghosts[:, 1]) and np.all(cs.prior[3:] < 0.5)
+
+
+def _exact_ghost(rig: Rig) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Two limbs A, B and the point G where cam0's line of sight to A crosses cam1's to B."""
+    a = np.array([2.6, 1.8, 1.0])
+    g = a + 0.5 * (a - rig.cameras[0].centre_m) / np.linalg.norm(a - rig.cameras[0].centre_m)
+    to_g = g - rig.cameras[1].centre_m
+    b = g - 0.6 * to_g / np.linalg.norm(to_g)
+    return a, b, g
+
+
+@pytest.mark.parametrize("enabled", [True, False])
+def test_crossing_lines_of_sight_of_two_limbs_are_explained_away(enabled):
+    rig = _rig()
+    a, b, g = _exact_ghost(rig)
+    limbs = np.stack([a, b])
+    # equal rel_v and silhouettes over A, B and G: only the other views can tell G is a ghost
+    obs = [
+        _observation(cam, limbs, rel_v=np.full(2, 0.5), silhouette_at_m=np.stack([a, b, g]))
+        for cam in rig
+    ]
+    cs = make_candidates(obs, rig, dataclasses.replace(CFG, explain_away=enabled))
+    to_limb = np.linalg.norm(cs.points_m[:, None] - limbs[None], axis=2).min(axis=1)
+    to_ghost = np.linalg.norm(cs.points_m - g, axis=1)
+    assert (to_limb < 1e-3).sum() >= 2  # both limbs found either way
+    assert (to_ghost < 0.01).any() != enabled
+
+
+def test_explain_away_keeps_a_limb_hidden_in_one_view():
+    # limb 1 shares camera 0's blob with limb 0 (one behind the other) but has its own in 1, 2
+    support = np.array([[0, 0, 0, -1], [0, 1, 1, -1]])
+    assert explain_away(support, np.array([0.9, 0.8])).tolist() == [True, True]
 
 
 def test_mismatched_relative_v_makes_p_o_small():
