@@ -303,12 +303,19 @@ def _persistent_assignment(
     (array([0]), array([0]))
     >>> _persistent_assignment(d, np.array([7, 8]), np.array([0, 1]), {}, EvalConfig())
     (array([1]), array([0]))
+    >>> d2 = np.array([[0.05, 0.1], [0.9, 0.2]])   # both limbs last had tracker 7
+    >>> _persistent_assignment(d2, np.array([7, 8]), np.array([0, 1]), {0: 7, 1: 7},
+    ...                        EvalConfig())
+    (array([0, 1]), array([0, 1]))
     """
     row_of = {int(t): i for i, t in enumerate(tracker_ids)}
-    kept_r, kept_c = [], []
-    for c, j in enumerate(true_idx):
-        r = row_of.get(previous.get(int(j), -1))
-        if r is not None and dist[r, c] <= cfg.gate_m:
+    kept_r: list[int] = []
+    kept_c: list[int] = []
+    # closest first: two limbs whose last matches were the same tracker cannot both keep it
+    prev_rows = [(row_of.get(previous.get(int(j), -1)), c) for c, j in enumerate(true_idx)]
+    prev_rows = [(r, c) for r, c in prev_rows if r is not None and dist[r, c] <= cfg.gate_m]
+    for r, c in sorted(prev_rows, key=lambda rc: dist[rc[0], rc[1]]):
+        if r not in kept_r:
             kept_r.append(r)
             kept_c.append(c)
     free_r = np.setdiff1d(np.arange(dist.shape[0]), kept_r)

@@ -240,11 +240,18 @@ class MultiTargetTracker:
             jitter_m=fcfg.position_jitter_m,
             max_speed_mps=fcfg.max_speed_mps,
         )
+        starts = np.arange(len(blocks)) * n
+        weights = prior
+        if fcfg.exclusion and len(pts) and len(blocks) > 1:
+            pred = st[:, :3].reshape(len(blocks), n, 3)
+            shares = sir.claim_shares(
+                pred.mean(axis=1), pred.var(axis=1).mean(axis=1), pts, fcfg.sigma_m
+            )
+            weights = np.repeat(shares * prior[None, :], n, axis=0)
         # eq. 17 for all particles of all targets at once; w_k ∝ p(z|x) (eq. 12, SIR)
         log_lik, support = sir.candidate_log_likelihood(
-            st[:, :3], pts, prior, fcfg.sigma_m, fcfg.clutter_level
+            st[:, :3], pts, weights, fcfg.sigma_m, fcfg.clutter_level
         )
-        starts = np.arange(len(blocks)) * n
         # likelihood level: the support of the best particle (the ML point, section 5.2)
         level = np.maximum.reduceat(support, starts)
         log_w, _ = sir.block_normalise(log_lik, starts)
@@ -325,7 +332,14 @@ class MultiTargetTracker:
         pos = np.array([tr.mean_m for tr in cand])
         d = np.linalg.norm(pos[:, None] - pos[None], axis=2)
         iu, ju = np.triu_indices(len(cand), 1)
-        close = d[iu, ju] < lc.combine_distance_m
+        hand = np.array([bool(tr.is_hand) and tr.person > 0 for tr in cand])
+        missing = np.array([tr.misses > 0 for tr in cand])
+        hands = hand[iu] & hand[ju]
+        # two hands of people meeting often leave one candidate (their blobs merge), which
+        # the nearer tracker takes: the other loses its support beside it; they have met
+        close = (d[iu, ju] < lc.combine_distance_m) | (
+            hands & (missing[iu] | missing[ju]) & (d[iu, ju] < lc.hand_merge_distance_m)
+        )
         pairs: dict[int, int] = {}
         drifted: set[int] = set()
         for k in np.flatnonzero(close)[np.argsort(d[iu, ju][close], kind="stable")]:
@@ -333,7 +347,9 @@ class MultiTargetTracker:
             if a.id in pairs or b.id in pairs or a.id in drifted or b.id in drifted:
                 continue
             bad = [tr for tr in (a, b) if tr.since_miss < lc.drift_window_frames]
-            if bad:  # the one that missed most recently slid onto the other
+            if bad and not (
+                a.is_hand and b.is_hand and a.person > 0 and b.person > 0
+            ):  # the one that missed most recently slid onto the other
                 drifted.add(min(bad, key=lambda tr: (tr.since_miss, -tr.id)).id)
             else:
                 pairs[a.id], pairs[b.id] = b.id, a.id

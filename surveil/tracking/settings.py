@@ -53,6 +53,12 @@ class FilterConfig:
     sigma_m: float = setting(
         0.03, "sigma of N(x; Z_c, sigma^2) in the likelihood (eq. 17), m", min=1e-4
     )
+    exclusion: bool = setting(
+        True,
+        "share each candidate among the targets that claim it (by their predicted clouds) "
+        "instead of letting it support every target fully: a target cannot feed on a "
+        "candidate another target explains better (not in the paper; docs/tracking.md)",
+    )
     clutter_level: float = setting(
         1e-3,
         "constant added to the unnormalised likelihood (no candidate = flat weights), unitless",
@@ -91,6 +97,12 @@ class LifecycleConfig:
     max_trackers: int = setting(24, "no new tracker starts while this many are live", min=1)
     combine_distance_m: float = setting(
         0.10, "two trackers whose estimates come closer than this combine, m", min=0.0
+    )
+    hand_merge_distance_m: float = setting(
+        0.2,
+        "two hands of people (labelled or waiting for their side) also combine when one of "
+        "them has lost its support this close to the other: their blobs merged, m",
+        min=0.0,
     )
     separate_distance_m: float = setting(
         0.20,

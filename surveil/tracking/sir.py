@@ -151,8 +151,9 @@ def candidate_log_likelihood(
         Particle positions, metres.
     cand_points_m : (K, 3) float64
         Candidate points Z_c, metres.
-    cand_prior : (K,) float64
-        Their priors p(Z_c) in [0, 1].
+    cand_prior : (K,) or (N, K) float64
+        Their priors p(Z_c) in [0, 1]; (N, K) gives every particle its own weights (the
+        manager's exclusion: a candidate's prior shared among the targets that claim it).
     sigma_m : float
         σ, metres.
     clutter : float
@@ -174,7 +175,10 @@ def candidate_log_likelihood(
     """
     require_shape("points_m", points_m, (None, 3), np.floating)
     require_shape("cand_points_m", cand_points_m, (None, 3), np.floating)
-    require_shape("cand_prior", cand_prior, (len(cand_points_m),), np.floating)
+    if np.ndim(cand_prior) == 2:
+        require_shape("cand_prior", cand_prior, (len(points_m), len(cand_points_m)), np.floating)
+    else:
+        require_shape("cand_prior", cand_prior, (len(cand_points_m),), np.floating)
     if not sigma_m > 0:
         raise ValueError(f"sigma_m must be > 0, got {sigma_m}")
     n = len(points_m)
@@ -189,7 +193,11 @@ def candidate_log_likelihood(
         )
         np.maximum(d2, 0.0, out=d2)
         # eq. 17: Σ_c exp(-d²/2σ²) p(Z_c)
-        support = np.exp(d2 * (-0.5 / (sigma_m * sigma_m))) @ cand_prior
+        g = np.exp(d2 * (-0.5 / (sigma_m * sigma_m)))
+        if np.ndim(cand_prior) == 2:
+            support = np.einsum("ij,ij->i", g, cand_prior)
+        else:
+            support = g @ cand_prior
     with np.errstate(divide="ignore"):
         log_lik = np.log(support + clutter)
     return log_lik, support
@@ -463,3 +471,37 @@ def weighted_two_means(
         assign = new_assign
     mass = np.bincount(assign, weights=weights, minlength=2)
     return centres, assign, mass
+
+
+def claim_shares(
+    means_m: np.ndarray, spreads_m2: np.ndarray, cand_points_m: np.ndarray, sigma_m: float
+) -> np.ndarray:
+    """(T, K) share of each candidate claimed by each target (columns sum to 1).
+
+    Target t claims candidate c in proportion to the density of Z_c under its predicted
+    cloud widened by the candidate noise, N(Z_c; mu_t, (s_t^2 + sigma^2) I): with two targets
+    near one candidate the nearer, tighter one takes most of it, and a lone target takes all.
+    This is the exclusion principle of multi-target particle filters (MacCormick and Blake):
+    without it a hand whose candidates vanished for a few frames is pulled onto the head beside
+    it, whose candidate is fully explained by the head's own tracker.
+
+    Parameters
+    ----------
+    means_m : (T, 3) float64 -- predicted means of the targets' clouds
+    spreads_m2 : (T,) float64 -- their per-axis variances (mean of the three), m^2
+    cand_points_m : (K, 3) float64
+    sigma_m : float -- the likelihood's sigma
+
+    Examples
+    --------
+    >>> shares = claim_shares(np.array([[0.0, 0, 0], [0.2, 0, 0]]), np.full(2, 1e-4),
+    ...                       np.array([[0.01, 0, 0], [0.1, 0, 0]]), 0.03)
+    >>> shares.round(2).tolist()
+    [[1.0, 0.5], [0.0, 0.5]]
+    """
+    var = np.asarray(spreads_m2, dtype=np.float64)[:, None] + sigma_m * sigma_m  # (T, 1)
+    d2 = np.square(means_m[:, None, :] - cand_points_m[None, :, :]).sum(axis=2)  # (T, K)
+    log_dens = -0.5 * d2 / var - 1.5 * np.log(var)
+    log_dens -= log_dens.max(axis=0, keepdims=True)
+    dens = np.exp(log_dens)
+    return dens / dens.sum(axis=0, keepdims=True)

@@ -14,7 +14,7 @@ from surveil.datatypes import (
     Silhouettes,
     TrackFrame,
 )
-from surveil.tracking import LifecycleConfig, MultiTargetTracker, TrackingConfig
+from surveil.tracking import FilterConfig, LifecycleConfig, MultiTargetTracker, TrackingConfig
 
 DT_NS = 66_666_667  # 15 fps
 
@@ -319,3 +319,58 @@ def test_a_tracker_never_labelled_is_retired_as_unclaimed(rig, rng):
     retired = [tr for f in out for tr in f.transitions if tr.new is Phase.UNINITIALISED]
     assert alive[5] == 1 and retired
     assert (retired[0].t_ns - out[0].t_ns) * 1e-9 > 1.0
+
+
+@pytest.mark.parametrize("exclusion", [True, False])
+def test_a_target_whose_candidates_vanish_is_not_pulled_onto_its_neighbour(rig, exclusion):
+    """Exclusion: a head's candidate belongs to the head's tracker; a hand 20 cm away whose
+    own candidates vanish stays put (and goes lost) instead of sliding onto the head."""
+    cfg = TrackingConfig(
+        filter=FilterConfig(exclusion=exclusion),
+        lifecycle=LifecycleConfig(retire_unclaimed_s=0.0),
+    )
+    trk = MultiTargetTracker(cfg, rig, seed=3)
+    rng = np.random.default_rng(0)
+    head = np.array([2.5, 2.0, 1.6])
+    hand = head + [0.2, 0.0, 0.0]
+    t = 0
+    for _ in range(12):  # both seen: two trackers
+        frame = trk.step(t, candidates([head, hand], rng))
+        t += DT_NS
+    assert len(frame.targets) == 2
+    hand_id = min(frame.targets, key=lambda s: np.linalg.norm(s.mean_m - hand)).target_id
+    for _ in range(6):  # the hand hides; the head stays
+        frame = trk.step(t, candidates([head], rng))
+        t += DT_NS
+    snap = {s.target_id: s for s in frame.targets}[hand_id]
+    assert (np.linalg.norm(snap.mean_m - head) < 0.05) != exclusion
+
+
+def test_a_hand_that_vanishes_beside_the_other_hand_joins_it_at_once(rig, rng):
+    """Meeting hands 15 cm apart whose blobs merge leave one candidate: with
+    hand_merge_distance_m the hand that lost it combines with the other within the frames a
+    loss takes to declare; without, it joins only if it drifts within the combine distance."""
+    p = body((2.5, 1.2), 90.0)
+    meet = p["head"] + 0.35 * p["fwd"] - [0, 0, 0.5]
+    path = [0.0] * 35 + list(np.linspace(0, 1, 9)[1:]) + [1.0] * 8
+    frames = []
+    for u in path:
+        lh = p["left_hand"] + u * (meet + 0.075 * p["left"] - p["left_hand"])
+        rh = p["right_hand"] + u * (meet - 0.075 * p["left"] - p["right_hand"])
+        frames.append([p["head"], rh] if u == 1.0 else [p["head"], lh, rh])
+    vanish = path.index(1.0)
+
+    def join_frame(merge_m: float) -> int | None:
+        lc = LifecycleConfig(retire_unclaimed_s=0.0, hand_merge_distance_m=merge_m)
+        out = run(MultiTargetTracker(TrackingConfig(lifecycle=lc), rig, seed=6), frames, rng)
+        ids = {s.label: s.target_id for s in out[34].targets}
+        pair = {ids["p1/left_hand"], ids["p1/right_hand"]}
+        for i, f in enumerate(out):
+            for t in f.transitions:
+                if t.new is Phase.COMBINED and {t.target_id, t.partner_id} == pair:
+                    return i
+        return None
+
+    with_rule, without = join_frame(0.2), join_frame(0.0)
+    assert with_rule is not None and with_rule <= vanish + 2
+    assert without is None or without > with_rule
