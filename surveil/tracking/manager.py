@@ -347,9 +347,7 @@ class MultiTargetTracker:
             if a.id in pairs or b.id in pairs or a.id in drifted or b.id in drifted:
                 continue
             bad = [tr for tr in (a, b) if tr.since_miss < lc.drift_window_frames]
-            if bad and not (
-                a.is_hand and b.is_hand and a.person > 0 and b.person > 0
-            ):  # the one that missed most recently slid onto the other
+            if bad and not hands[k]:  # the one that missed most recently slid onto the other
                 drifted.add(min(bad, key=lambda tr: (tr.since_miss, -tr.id)).id)
             else:
                 pairs[a.id], pairs[b.id] = b.id, a.id
