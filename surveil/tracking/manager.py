@@ -79,6 +79,8 @@ class _Track:
     partner: int | None = None
     before_vec_m: np.ndarray | None = None
     apart_frames: int = 0
+    split_m: np.ndarray | None = None  # (2, 3) the two modes of a combined pair this frame
+    split_vel_mps: np.ndarray | None = None  # (2, 3) their velocities
     history: deque = field(default_factory=lambda: deque(maxlen=HISTORY_FRAMES))
 
     @property
@@ -148,6 +150,7 @@ class MultiTargetTracker:
         self._next_id = 1
         self._next_person = 1
         self._last_t_ns: int | None = None
+        self._shares: dict[int, np.ndarray] = {}  # tracker id -> exclusion share per candidate
 
     # ------------------------------------------------------------------ public step
 
@@ -199,7 +202,7 @@ class MultiTargetTracker:
 
         self._filter(pts, prior, dt_s)
         pairs, drifted = self._combine_pairs()
-        self._measure_separation()
+        self._measure_separation(pts, prior, dt_s)
         seeds = self._update_seeds(pts, prior, dt_s)
         reacquired = self._reacquire(seeds, t_ns)
         rel_v = self._candidate_rel_v(candidates, observations)
@@ -219,6 +222,7 @@ class MultiTargetTracker:
         n = fcfg.n_particles
         tracks = list(self._tracks.values())
         act = np.array([tr.phase in ACTIVE for tr in tracks], dtype=bool)
+        self._shares = {}
         if not act.any():
             return
         blocks = np.flatnonzero(act)
@@ -242,12 +246,14 @@ class MultiTargetTracker:
         )
         starts = np.arange(len(blocks)) * n
         weights = prior
+        shares = np.ones((len(blocks), len(pts)))
         if fcfg.exclusion and len(pts) and len(blocks) > 1:
             pred = st[:, :3].reshape(len(blocks), n, 3)
             shares = sir.claim_shares(
                 pred.mean(axis=1), pred.var(axis=1).mean(axis=1), pts, fcfg.sigma_m
             )
             weights = np.repeat(shares * prior[None, :], n, axis=0)
+        self._shares = {tr.id: shares[i] for i, tr in enumerate(act_tracks)}
         # eq. 17 for all particles of all targets at once; w_k ∝ p(z|x) (eq. 12, SIR)
         log_lik, support = sir.candidate_log_likelihood(
             st[:, :3], pts, weights, fcfg.sigma_m, fcfg.clutter_level
@@ -265,9 +271,7 @@ class MultiTargetTracker:
                 continue
             j = local[tr.partner]
             done.update((tr.id, tr.partner))
-            self._pooled_update(
-                i, j, act_tracks, st, log_lik, support, new, mean, cov, level, dt_s
-            )
+            self._pooled_update(i, j, log_lik, support, st, new, mean, cov, level)
         self._states[rows] = new
         for i, tr in enumerate(act_tracks):
             tr.mean_m = mean[i, :3].copy()
@@ -289,32 +293,27 @@ class MultiTargetTracker:
         self,
         i: int,
         j: int,
-        act_tracks: list[_Track],
-        st: np.ndarray,
         log_lik: np.ndarray,
         support: np.ndarray,
+        st: np.ndarray,
         new: np.ndarray,
         mean: np.ndarray,
         cov: np.ndarray,
         level: np.ndarray,
-        dt_s: float,
     ) -> None:
-        """One filter for a combined pair: pool both blocks, find the two modes, give each
-        tracker the mode that continues its previous position, resample each mode."""
+        """One filter for a combined pair (section 5.2): pool both blocks' particles and
+        weights, and resample each block from the pooled posterior. Both trackers then carry
+        the pair's estimate; its modes, when the targets part, are found among the candidates
+        (:meth:`_measure_separation`), not by splitting this cloud: while the targets are
+        together the cloud has one mode, and a split of it drifts apart on the particles'
+        old, opposite velocities instead of following the candidates."""
         n = self.cfg.filter.n_particles
         pool = np.concatenate([np.arange(i * n, (i + 1) * n), np.arange(j * n, (j + 1) * n)])
-        p_st = st[pool]
         lw, _ = sir.block_normalise(log_lik[pool], np.zeros(1, dtype=np.intp))
         w = np.exp(lw)
-        a, b = act_tracks[i], act_tracks[j]
-        init = np.stack([a.mean_m + a.vel_mps * dt_s, b.mean_m + b.vel_mps * dt_s])
-        centres, assign, mass = sir.weighted_two_means(p_st[:, :3], w, init)
-        for k, blk in ((0, i), (1, j)):
-            wk = np.where(assign == k, w, 0.0) if mass[k] > 0 else w
-            wk = wk / wk.sum()
-            idx = sir.systematic_resample(wk, self._rng, n)
-            new[blk * n : (blk + 1) * n] = p_st[idx]
-            m6, c6 = sir.block_mean_cov(p_st, np.log(np.maximum(wk, 1e-300)), np.zeros(1, int))
+        m6, c6 = sir.block_mean_cov(st[pool], lw, np.zeros(1, dtype=np.intp))
+        for blk in (i, j):
+            new[blk * n : (blk + 1) * n] = st[pool[sir.systematic_resample(w, self._rng, n)]]
             mean[blk], cov[blk] = m6[0], c6[0]
         level[i] = level[j] = float(support[pool].max())
 
@@ -353,21 +352,55 @@ class MultiTargetTracker:
                 pairs[a.id], pairs[b.id] = b.id, a.id
         return pairs, drifted
 
-    def _measure_separation(self) -> None:
+    def _measure_separation(self, pts: np.ndarray, prior: np.ndarray, dt_s: float) -> None:
+        """The modes of each combined pair's posterior, from the candidates it claims.
+
+        Under eq. 17 the posterior's modes sit on candidates. A pair has two modes when,
+        among the candidates within ``separate_gate_m`` of its estimate that it claims (an
+        exclusion share of at least a half; ``separate_min_prior`` or more), the strongest
+        and the strongest of those at least ``separate_distance_m`` from it exist; both
+        trackers record them (``split_m``) and their velocities from the previous frame's
+        modes, and count the consecutive frames (``apart_frames``)."""
+        lc = self.cfg.lifecycle
+        done: set[int] = set()
         for tr in self._tracks.values():
-            if tr.phase is Phase.COMBINED and tr.partner in self._tracks:
-                other = self._tracks[tr.partner]
-                apart = np.linalg.norm(tr.mean_m - other.mean_m)
-                if apart > self.cfg.lifecycle.separate_distance_m:
-                    tr.apart_frames += 1
-                else:
-                    tr.apart_frames = 0
+            if tr.phase is not Phase.COMBINED or tr.partner not in self._tracks or tr.id in done:
+                continue
+            other = self._tracks[tr.partner]
+            done.update((tr.id, other.id))
+            split = None
+            if len(pts):
+                share = self._shares.get(tr.id, 1.0) + self._shares.get(other.id, 1.0)
+                ok = (
+                    (share >= 0.5)
+                    & (prior >= lc.separate_min_prior)
+                    & (np.linalg.norm(pts - tr.mean_m, axis=1) < lc.separate_gate_m)
+                )
+                idx = np.flatnonzero(ok)
+                idx = idx[np.argsort(-prior[idx], kind="stable")]
+                if len(idx) >= 2:
+                    far = np.linalg.norm(pts[idx[1:]] - pts[idx[0]], axis=1)
+                    far = np.flatnonzero(far >= lc.separate_distance_m)
+                    if len(far):
+                        split = pts[[idx[0], idx[1 + far[0]]]]
+            vel = np.zeros((2, 3))
+            if split is not None and tr.split_m is not None and dt_s > 0:
+                prev = tr.split_m
+                if np.linalg.norm(split - prev) > np.linalg.norm(split - prev[::-1]):
+                    prev = prev[::-1]
+                vel = (split - prev) / dt_s
+            for t in (tr, other):
+                t.apart_frames = t.apart_frames + 1 if split is not None else 0
+                t.split_m = split
+                t.split_vel_mps = vel
 
     def _unexplained(self, pts: np.ndarray, prior: np.ndarray, min_prior: float) -> np.ndarray:
         """Indices of candidates with prior >= min_prior farther than explained_radius_m
-        from every active tracker's estimate."""
+        from every active tracker's estimate and every mode of a combined pair (the parting
+        targets' own candidates, which they take when they separate)."""
         ok = prior >= min_prior
         act = [tr.mean_m for tr in self._tracks.values() if tr.phase in ACTIVE]
+        act += [m for tr in self._tracks.values() if tr.split_m is not None for m in tr.split_m]
         if act and len(pts):
             d = np.linalg.norm(pts[:, None] - np.array(act)[None], axis=2)
             ok &= d.min(axis=1) > self.cfg.lifecycle.explained_radius_m
@@ -664,6 +697,7 @@ class MultiTargetTracker:
                 tr.partner = None
                 tr.before_vec_m = None
                 tr.apart_frames = 0
+                tr.split_m = tr.split_vel_mps = None
             if new is Phase.LOST:
                 tr.lost_since_ns = t_ns
                 tr.mean_m = tr.last_good_m.copy()
@@ -709,18 +743,14 @@ class MultiTargetTracker:
         return common[0][2] - common[0][1]
 
     def _separate(self, a: _Track, b: _Track) -> None:
-        """Apply the angle rule (section 7.1): a and b take the modes it gives them."""
-        (mode_a, _), angle = lab.angle_rule(a.before_vec_m, a.mean_m, b.mean_m)
+        """Apply the angle rule (section 7.1): a and b each restart on the mode it gives them."""
+        modes, vel = a.split_m, a.split_vel_mps
+        if modes is None or vel is None:
+            return
+        (mode_a, mode_b), angle = lab.angle_rule(a.before_vec_m, modes[0], modes[1])
         log.debug("t%d / t%d separate, angle %.0f deg", a.id, b.id, np.degrees(angle))
-        if mode_a == 1:  # swap the two modes (particle blocks and estimates)
-            ids = list(self._tracks)
-            ra = self._block_rows(np.array([ids.index(a.id)]))
-            rb = self._block_rows(np.array([ids.index(b.id)]))
-            self._states[ra], self._states[rb] = self._states[rb].copy(), self._states[ra].copy()
-            for attr in ("mean_m", "cov_m2", "vel_mps", "last_good_m"):
-                va, vb = getattr(a, attr), getattr(b, attr)
-                setattr(a, attr, vb)
-                setattr(b, attr, va)
+        self._reinit(a, modes[mode_a], vel[mode_a])
+        self._reinit(b, modes[mode_b], vel[mode_b])
 
     def _reinit(self, tr: _Track, position_m: np.ndarray, velocity_mps: np.ndarray) -> None:
         """Draw the tracker's particles around a position (new or re-acquired target)."""

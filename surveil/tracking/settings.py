@@ -106,8 +106,17 @@ class LifecycleConfig:
     )
     separate_distance_m: float = setting(
         0.20,
-        "a combined pair separates when its two modes are farther apart than this, m",
+        "a combined pair separates when its two modes (candidates) are farther apart than this, m",
         min=0.0,
+    )
+    separate_gate_m: float = setting(
+        0.45,
+        "a combined pair's modes are candidates within this of its estimate (hands parting "
+        "at 2 m/s are ~25 cm from it after two frame sets), m",
+        min=0.0,
+    )
+    separate_min_prior: float = setting(
+        0.2, "a candidate with a prior p(Z) below this is not a mode of a combined pair", min=0.0
     )
     separate_frames: int = setting(
         2, "consecutive frame sets the modes must stay apart before separating", min=1

@@ -417,62 +417,6 @@ def block_mean_cov(
     return mean, cov
 
 
-def weighted_two_means(
-    points: np.ndarray,
-    weights: np.ndarray,
-    init_centres: np.ndarray,
-    n_iter: int = 5,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Split a weighted cloud into two modes by weighted 2-means (Lloyd iterations).
-
-    Used on the pooled particles of a combined pair (paper 004 section 5.2: "the modes of the
-    posterior ... should be extracted and monitored"). Starting from the previous modes keeps
-    the mode order stable from frame to frame.
-
-    Parameters
-    ----------
-    points : (N, 3) float64
-    weights : (N,) float64, non-negative
-    init_centres : (2, 3) float64
-    n_iter : int
-
-    Returns
-    -------
-    centres : (2, 3) float64
-        Weighted means of the two clusters (a cluster that lost all its points keeps its
-        centre).
-    assign : (N,) intp
-        0 or 1 per point.
-    mass : (2,) float64
-        Weight of each cluster (sums to Σ weights).
-
-    Examples
-    --------
-    >>> p = np.array([[0.0, 0, 0], [0.1, 0, 0], [1.0, 0, 0], [1.1, 0, 0]])
-    >>> c, a, m = weighted_two_means(p, np.ones(4), np.array([[0.0, 0, 0], [1.0, 0, 0]]))
-    >>> c[:, 0].round(2).tolist(), a.tolist(), m.tolist()
-    ([0.05, 1.05], [0, 0, 1, 1], [2.0, 2.0])
-    """
-    require_shape("points", points, (None, 3), np.floating)
-    require_shape("init_centres", init_centres, (2, 3), np.floating)
-    centres = np.array(init_centres, dtype=np.float64)
-    assign = np.zeros(len(points), dtype=np.intp)
-    for it in range(max(1, n_iter)):
-        d0 = np.sum((points - centres[0]) ** 2, axis=1)
-        d1 = np.sum((points - centres[1]) ** 2, axis=1)
-        new_assign = (d1 < d0).astype(np.intp)
-        mass = np.bincount(new_assign, weights=weights, minlength=2)
-        for k in (0, 1):
-            if mass[k] > 0:
-                sel = new_assign == k
-                centres[k] = weights[sel] @ points[sel] / mass[k]
-        if it > 0 and np.array_equal(new_assign, assign):
-            break
-        assign = new_assign
-    mass = np.bincount(assign, weights=weights, minlength=2)
-    return centres, assign, mass
-
-
 def claim_shares(
     means_m: np.ndarray, spreads_m2: np.ndarray, cand_points_m: np.ndarray, sigma_m: float
 ) -> np.ndarray:

@@ -212,6 +212,22 @@ def test_join_and_separate_follow_the_angle_rule(rig, rng, cross):
     assert bool(np.linalg.norm(final["p1/left_hand"] - true_left_final) < 0.04) is (not cross)
 
 
+def test_joined_hands_stay_combined_through_missing_candidates(rig, rng):
+    """Hands that met head-on keep opposite velocities in their particles; frames without any
+    candidate while they are together must not split the pair (the split comes only when two
+    candidates part)."""
+    frames, _, _ = clap_frames(cross=False)
+    joined = range(35 + 8, 35 + 8 + 5)  # the five frames the hands rest together
+    frames = [[f[0]] if i in joined and i % 2 else f for i, f in enumerate(frames)]
+    out = run(MultiTargetTracker(LONE, rig, seed=7), frames, rng)
+    splits = [i for i, f in enumerate(out) for t in f.transitions if t.old is Phase.COMBINED]
+    joins = [i for i, f in enumerate(out) for t in f.transitions if t.new is Phase.COMBINED]
+    assert len(joins) == 2 and len(splits) == 2  # one pair, joined once, parted once
+    assert min(splits) > max(joined)  # not before the hands move apart
+    final = by_label(out[-1])
+    assert {"p1/left_hand", "p1/right_hand"} <= set(final)
+
+
 def test_same_seed_same_output_and_skipped_frames(rig):
     frames = two_people_frames(30, b_from=5)
 

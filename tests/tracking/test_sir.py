@@ -144,14 +144,3 @@ def test_block_mean_cov_matches_numpy(rng):
     for b, sl in enumerate((slice(0, 5), slice(5, 12))):
         assert np.allclose(mean[b], np.average(pts[sl], axis=0, weights=w[sl]))
         assert np.allclose(cov[b], np.cov(pts[sl].T, aweights=w[sl], bias=True))
-
-
-def test_two_means_finds_two_modes(rng):
-    a = rng.normal([0, 0, 1], 0.01, size=(100, 3))
-    b = rng.normal([0.3, 0, 1], 0.01, size=(60, 3))
-    pts = np.concatenate([a, b])
-    centres, assign, mass = sir.weighted_two_means(
-        pts, np.ones(160), np.array([[0.1, 0, 1], [0.2, 0, 1]])
-    )
-    assert np.allclose(centres, [[0, 0, 1], [0.3, 0, 1]], atol=0.01)
-    assert assign[:100].sum() == 0 and assign[100:].all() and mass.tolist() == [100, 60]
