@@ -10,7 +10,8 @@ The limbs' labels from before the join and the carry estimates at the first cont
 the carry stage freezes estimates while hands overlap) are kept. The
 episode is separated by the combined -> unlabelled transition (or, if it never combined, when
 the distance exceeds ``coincidence_m`` again). The **post-separation point** is
-``separation_delay_s`` after the two targets are ``separation_m`` apart, or
+the first frame set at least ``separation_delay_s`` after the two targets are ``separation_m``
+apart at which the carry estimates the rule looks at are confident (``min_confidence``), or
 ``separation_timeout_s`` after the separation, whichever comes first; the carry estimates there
 are "after". After the separation the trackers are unlabelled; a tracker that has been relabelled
 by then is matched to the pre-join labels by label, otherwise by tracker id.
@@ -424,7 +425,11 @@ class ActivityEngine:
                     continue
             if ep.apart_ns is None and d is not None and d >= th.separation_m:
                 ep.apart_ns = t
-            ready = ep.apart_ns is not None and t - ep.apart_ns >= _ns(th.separation_delay_s)
+            ready = (
+                ep.apart_ns is not None
+                and t - ep.apart_ns >= _ns(th.separation_delay_s)
+                and self._after_known(ep.rule, self._after(ep, cur))
+            )
             timed_out = t - ep.separated_ns >= _ns(th.separation_timeout_s)
             if ready or timed_out:
                 ev = self._decide_pair(ep, cur, timed_out=not ready)
@@ -433,14 +438,30 @@ class ActivityEngine:
                 self._pair_disarmed.add((key[0], frozenset(ep.ids)))
         return events
 
+    def _after(
+        self, ep: _PairEpisode, cur: _Frame
+    ) -> tuple[CarryEstimate | None, CarryEstimate | None]:
+        """The latest carry estimates of the two limbs, in the order of ``ep.labels``: the
+        tracker holding each pre-join label now, by label if relabelled, else by id."""
+        now = {i: cur.targets[i].label for i in ep.ids if i in cur.targets}
+        holders = [
+            next((i for i in ep.ids if now.get(i) == lab), ep.ids[k])
+            for k, lab in enumerate(ep.labels)
+        ]
+        return self._latest_carry(holders[0], cur.t_ns), self._latest_carry(holders[1], cur.t_ns)
+
+    @staticmethod
+    def _after_known(rule: Rule, after: Iterable[CarryEstimate | None]) -> bool:
+        """Whether the carry evidence after a separation is decided (confident for every limb
+        whose state the rule looks at): a window restarted at the separation holds only a
+        few, often ambiguous, frames when ``separation_delay_s`` has passed."""
+        if all(req is None for req in rule.carry_after):
+            return True
+        return all(carry_state(est, rule.thresholds.min_confidence) is not None for est in after)
+
     def _decide_pair(self, ep: _PairEpisode, cur: _Frame, timed_out: bool) -> ActivityEvent | None:
         rule, th, t = ep.rule, ep.rule.thresholds, cur.t_ns
-        # which tracker holds each pre-join label now: by label if relabelled, else by id
-        now = {i: cur.targets[i].label for i in ep.ids if i in cur.targets}
-        holders = []
-        for k, lab in enumerate(ep.labels):
-            holders.append(next((i for i in ep.ids if now.get(i) == lab), ep.ids[k]))
-        after = tuple(self._latest_carry(h, t) for h in holders)
+        after = self._after(ep, cur)
         for a, b in _orders(rule, ep.labels):
             bef = (ep.before[a], ep.before[b])
             aft = (after[a], after[b])
@@ -572,7 +593,11 @@ class ActivityEngine:
             if st.apart_ns is None and snap is not None:
                 if float(np.linalg.norm(snap.mean_m - st.point_m)) >= th.separation_m:
                     st.apart_ns = t
-            ready = st.apart_ns is not None and t - st.apart_ns >= _ns(th.separation_delay_s)
+            ready = (
+                st.apart_ns is not None
+                and t - st.apart_ns >= _ns(th.separation_delay_s)
+                and self._after_known(st.rule, [self._latest_carry(st.hand_id, t)])
+            )
             timed_out = t - st.detected_ns >= _ns(th.separation_timeout_s)
             if ready or timed_out:
                 ev = self._decide_still(st, cur, timed_out=not ready)

@@ -299,7 +299,7 @@ def analyse_hand_view(
     r_hi = projected_radius_px(camera, cfg.max_radius_m, z, cfg)
     search = max(camera.K[0, 0] * cfg.blob_search_m / z, 1.5)
     h, w = bgr.shape[:2]
-    half = int(np.ceil(r_hi + search)) + 1
+    half = int(np.ceil(2.0 * r_hi + search)) + 1
     uc, vc = int(round(uv[0])), int(round(uv[1]))
     x0, x1 = max(uc - half, 0), min(uc + half + 1, w)
     y0, y1 = max(vc - half, 0), min(vc + half + 1, h)

@@ -191,6 +191,23 @@ def test_low_confidence_carry_is_unknown(rules):
     assert run(rules, two_people(gives, takes).stream()) == []
 
 
+def test_decision_waits_for_confident_carry_after_the_separation(rules):
+    """Right after the separation the giver's restarted window is ambiguous (here it even
+    leans the wrong way, unconfidently); the post-separation point waits for evidence."""
+    late_s = 2.0
+
+    def gives(t):
+        if t < 1.2:
+            return holding(GREEN)(t)
+        return holding(GREEN, conf=0.1)(t) if t < late_s else empty()(t)
+
+    takes = switch(1.2, empty(), holding(GREEN))
+    events = run(rules, two_people(gives, takes).stream())
+    assert [e.activity for e in events] == ["exchange"]
+    assert events[0].end_ns >= late_s * 1e9
+    assert events[0].confidence > 0.5  # decided on evidence, not by the timeout
+
+
 def test_exchange_needs_the_same_object(rules):
     """The giver held green, the taker holds blue afterwards: not the same object."""
     gives = switch(1.2, holding(GREEN), empty())
