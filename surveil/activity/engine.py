@@ -515,13 +515,19 @@ class ActivityEngine:
     # still episodes (pick / place)
 
     def _hand_track(self, hand_id: int, since_ns: int) -> tuple[np.ndarray, np.ndarray, bool]:
-        """(t_ns (T,), points_m (T, 3), all normal) of a hand since ``since_ns``."""
+        """(t_ns (T,), points_m (T, 3), all normal) of a hand since ``since_ns``, or since it
+        last left the combined or lost state if that is later: while combined the estimate is
+        the pair's and while lost it is stale, so neither shows the hand's own reach (and its
+        carry estimates then are from before the join, not from the start of the reach)."""
         ts, ps, normal = [], [], True
         for fr in self._frames:
             if fr.t_ns < since_ns:
                 continue
             snap = fr.targets.get(hand_id)
             if snap is None:
+                continue
+            if snap.phase in (Phase.COMBINED, Phase.LOST):
+                ts, ps, normal = [], [], True
                 continue
             ts.append(fr.t_ns)
             ps.append(snap.mean_m)

@@ -384,13 +384,17 @@ class MultiTargetTracker:
                     if len(far):
                         split = pts[[idx[0], idx[1 + far[0]]]]
             vel = np.zeros((2, 3))
+            continued = False
             if split is not None and tr.split_m is not None and dt_s > 0:
                 prev = tr.split_m
                 if np.linalg.norm(split - prev) > np.linalg.norm(split - prev[::-1]):
                     prev = prev[::-1]
-                vel = (split - prev) / dt_s
+                step = np.linalg.norm(split - prev, axis=1)
+                continued = bool((step <= lc.mode_gate_m).all())
+                vel = (split - prev) / dt_s if continued else vel
+            apart = 0 if split is None else (tr.apart_frames + 1 if continued else 1)
             for t in (tr, other):
-                t.apart_frames = t.apart_frames + 1 if split is not None else 0
+                t.apart_frames = apart
                 t.split_m = split
                 t.split_vel_mps = vel
 

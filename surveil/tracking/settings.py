@@ -118,6 +118,13 @@ class LifecycleConfig:
     separate_min_prior: float = setting(
         0.2, "a candidate with a prior p(Z) below this is not a mode of a combined pair", min=0.0
     )
+    mode_gate_m: float = setting(
+        0.15,
+        "a combined pair's modes count as the same two targets in consecutive frame sets "
+        "when each moved at most this; otherwise the count of frames apart restarts (a "
+        "stray candidate near joined hands must not part them), m",
+        min=0.0,
+    )
     separate_frames: int = setting(
         2, "consecutive frame sets the modes must stay apart before separating", min=1
     )

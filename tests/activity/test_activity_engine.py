@@ -165,6 +165,26 @@ def test_place_reach_stop_return_leaves_object(rules):
     assert abs(ev.climax_ns - 1.1 * S) <= 0.1 * S
 
 
+def test_receiving_hand_that_stops_after_an_exchange_is_not_a_pick(rules):
+    """The receiver's hand parts from the giver's, moves on a little and stops away from the
+    body. Its reach is the pair's, seen through the combined state, and its carry estimate
+    before the join (empty) is not its state when it stops: no pick, only the exchange."""
+    gives = switch(1.2, holding(GREEN), empty())
+    takes = switch(1.2, empty(), holding(GREEN))
+    script = two_people(gives, takes)
+    stop = (0.8, 0.05, 1.0)
+    script.tracks[5].path = keyframes(
+        (0.5, P2_RIGHT_REST),
+        (1.0, (0.63, 0, 1.05)),
+        (1.5, (0.63, 0, 1.05)),
+        (1.9, stop),
+        (2.6, stop),
+        (3.2, P2_RIGHT_REST),
+    )
+    events = run(rules, script.stream())
+    assert [e.activity for e in events] == ["exchange"]
+
+
 # ---- negatives -------------------------------------------------------------------------------
 
 

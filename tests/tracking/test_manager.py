@@ -228,6 +228,22 @@ def test_joined_hands_stay_combined_through_missing_candidates(rig, rng):
     assert {"p1/left_hand", "p1/right_hand"} <= set(final)
 
 
+def test_stray_candidates_beside_joined_hands_do_not_part_them(rig, rng):
+    """A candidate that flickers 25-35 cm from joined hands, somewhere new each frame, is two
+    modes for a frame but not two targets moving apart: the pair stays combined until the
+    hands themselves part."""
+    frames, _, p = clap_frames(cross=False)
+    joined = range(35 + 8, 35 + 8 + 5)
+    offsets = [p["left"], -p["fwd"], [0.0, 0.0, 1.0], -p["left"], p["fwd"]]
+    for k, i in enumerate(joined):
+        direction = np.asarray(offsets[k], dtype=float)
+        stray = frames[i][1] + (0.25 + 0.02 * k) * direction / np.linalg.norm(direction)
+        frames[i] = [*frames[i], stray]
+    out = run(MultiTargetTracker(LONE, rig, seed=7), frames, rng)
+    splits = [i for i, f in enumerate(out) for t in f.transitions if t.old is Phase.COMBINED]
+    assert len(splits) == 2 and min(splits) > max(joined)
+
+
 def test_same_seed_same_output_and_skipped_frames(rig):
     frames = two_people_frames(30, b_from=5)
 
