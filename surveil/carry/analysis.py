@@ -33,6 +33,7 @@ Choices where the paper leaves freedom (docs/carry.md):
 from __future__ import annotations
 
 import dataclasses
+import functools
 import logging
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -42,10 +43,10 @@ import numpy as np
 
 from surveil.camera import Camera, Rig
 from surveil.carry.fusion import HueWindow, decide_carrying, subtract_distribution
-from surveil.carry.hue import pixel_hues, region_mode_pdf
+from surveil.carry.hue import pixel_hue_codes, region_mode_pdf
 from surveil.carry.settings import CarryConfig
 from surveil.datatypes import CameraObservation, CarryEstimate, Limb, Phase, TargetSnapshot
-from surveil.validate import require_shape
+from surveil.validate import readonly, require_shape
 
 log = logging.getLogger(__name__)
 
@@ -84,14 +85,23 @@ def rim_background_fraction(
     require_shape("foreground", foreground, (None, None), np.bool_)
     h, w = foreground.shape
     radii = np.asarray(radii_px, np.float64).reshape(-1)
-    angles = np.linspace(0.0, 2.0 * np.pi, n_samples, endpoint=False)
-    u = np.rint(centre_px[0] + radii[:, None] * np.cos(angles)).astype(np.int64)
-    v = np.rint(centre_px[1] + radii[:, None] * np.sin(angles)).astype(np.int64)
+    cos, sin = _unit_circle(n_samples)
+    u = np.rint(centre_px[0] + radii[:, None] * cos).astype(np.int64)
+    v = np.rint(centre_px[1] + radii[:, None] * sin).astype(np.int64)
     inside = (u >= 0) & (u < w) & (v >= 0) & (v < h)
     bg = np.zeros(u.shape, bool)
     bg[inside] = ~foreground[v[inside], u[inside]]
     n_in = inside.sum(axis=1)
     return np.where(n_in > 0, bg.sum(axis=1) / np.maximum(n_in, 1), 0.0)
+
+
+@functools.cache
+def _unit_circle(n_samples: int) -> tuple[np.ndarray, np.ndarray]:
+    """(cos, sin) of ``n_samples`` angles evenly spaced from 0 (read-only, computed once)."""
+    angles = np.linspace(0.0, 2.0 * np.pi, n_samples, endpoint=False)
+    cos, sin = np.cos(angles), np.sin(angles)
+    readonly(cos, sin)
+    return cos, sin
 
 
 def reliability(background_fraction: np.ndarray | float, rho_min: float) -> np.ndarray:
@@ -172,6 +182,37 @@ def find_hand_blob(blob_labels: np.ndarray, point_px: np.ndarray, search_px: flo
     return int(win[rows[best], cols[best]])
 
 
+def circle_box(
+    centre_px: np.ndarray, radius_px: float, shape: tuple[int, int]
+) -> tuple[slice, slice]:
+    """Rows and columns of an image that hold every pixel within ``radius_px`` of a point.
+
+    The box is one pixel wider than the circle on every side, so that rounding in the
+    distance test cannot put a pixel of the circle outside it, and is clipped to ``shape``.
+
+    Parameters
+    ----------
+    centre_px : (2,) float
+        Circle centre ``(u, v)``.
+    radius_px : float
+    shape : (H, W)
+        The image.
+
+    Returns
+    -------
+    (slice, slice)
+        ``image[box]`` is the box (rows, then columns).
+
+    >>> circle_box(np.array([10.0, 5.0]), 3.0, (8, 40))
+    (slice(1, 8, None), slice(6, 15, None))
+    """
+    h, w = shape
+    u, v, r = float(centre_px[0]), float(centre_px[1]), float(radius_px)
+    rows = slice(max(int(np.floor(v - r)) - 1, 0), min(int(np.floor(v + r)) + 2, h))
+    cols = slice(max(int(np.floor(u - r)) - 1, 0), min(int(np.floor(u + r)) + 2, w))
+    return rows, cols
+
+
 def hand_region(
     foreground: np.ndarray,
     skin: np.ndarray,
@@ -210,16 +251,14 @@ def hand_region(
     require_shape("skin", skin, foreground.shape, np.bool_)
     require_shape("blob", blob, foreground.shape, np.bool_)
     h, w = foreground.shape
-    yy, xx = np.ogrid[:h, :w]
+    yy, xx = np.arange(h)[:, None], np.arange(w)
     disk = (xx - centre_px[0]) ** 2 + (yy - centre_px[1]) ** 2 <= radius_px**2
     cand = disk & (foreground | blob)
-    _, labels = cv2.connectedComponents(cand.view(np.uint8), connectivity=8)
-    hand_labels = np.unique(labels[blob & disk])
-    hand_labels = hand_labels[hand_labels > 0]
-    if len(hand_labels) == 0:
-        return np.zeros_like(foreground)
-    connected = np.isin(labels, hand_labels)
-    return connected & ~skin & ~blob
+    n_labels, labels = cv2.connectedComponents(cand.view(np.uint8), connectivity=8)
+    touches_hand = np.zeros(n_labels, bool)
+    touches_hand[labels[blob & disk]] = True
+    touches_hand[0] = False  # the background of cand
+    return touches_hand[labels] & ~skin & ~blob
 
 
 @dataclass(frozen=True, slots=True)
@@ -260,7 +299,7 @@ def projected_radius_px(
     13.9
     """
     r = camera.K[0, 0] * radius_m / max(depth_m, 1e-9)
-    return float(np.clip(r, cfg.min_radius_px, cfg.max_radius_px))
+    return float(min(max(r, cfg.min_radius_px), cfg.max_radius_px))
 
 
 def analyse_hand_view(
@@ -272,7 +311,9 @@ def analyse_hand_view(
 ) -> HandView | None:
     """Hue distribution and reliability of one hand in one camera (sections 7.2-7.3).
 
-    Only a region of interest around the projected hand is processed.
+    Only a region of interest around the projected hand is processed, and most of the work
+    only on the bounding box of the chosen circle; the extent test of
+    :func:`~surveil.carry.hue.connected_modes` looks at the whole region of interest.
 
     Parameters
     ----------
@@ -305,44 +346,55 @@ def analyse_hand_view(
     y0, y1 = max(vc - half, 0), min(vc + half + 1, h)
     origin = np.array([x0, y0], np.float64)
     blob_labels = observation.blobs.labels[y0:y1, x0:x1]
-    label = find_hand_blob(blob_labels, uv - origin, search)
+    hand_px = uv - origin
+    label = find_hand_blob(blob_labels, hand_px, search)
     if label == 0:
         return None
     blob = blob_labels == label
     rows, cols = np.nonzero(blob)
-    pts = np.column_stack([cols, rows]).astype(np.float64)
     # centre on the blob's pixels near the hand (a bare forearm must not drag the circle away)
-    d2 = np.sum((pts - (uv - origin)) ** 2, axis=1)
+    du, dv = cols - hand_px[0], rows - hand_px[1]
+    d2 = du * du + dv * dv
     for reach in (r_lo, r_hi):
-        if np.any(d2 <= reach**2):
-            pts = pts[d2 <= reach**2]
+        near = d2 <= reach**2
+        if near.any():
+            rows, cols = rows[near], cols[near]
             break
-    centre = pts.mean(axis=0)
-    r_blob = float(np.sqrt(np.max(np.sum((pts - centre) ** 2, axis=1)))) + 0.5
+    centre = np.array([cols.mean(), rows.mean()])
+    r_blob = float(np.sqrt(np.max((cols - centre[0]) ** 2 + (rows - centre[1]) ** 2))) + 0.5
     r_small = min(max(r_lo, r_blob), r_hi)
     radii = np.linspace(r_small, r_hi, cfg.n_radius_steps)
     foreground = observation.silhouettes.labels[y0:y1, x0:x1] > 0
     bg = rim_background_fraction(foreground, centre, radii, cfg.n_rim_samples)
     k = choose_radius(bg, cfg.grow_stop_bg, cfg.inside_bg)
+    radius = float(radii[k])
     skin = observation.skin[y0:y1, x0:x1]
-    region = hand_region(foreground, skin, blob, centre, float(radii[k]))
-    hues = pixel_hues(bgr[y0:y1, x0:x1], cfg.min_saturation, cfg.min_value)
-    outer = np.where(foreground & ~skin, hues, np.float32(np.nan))
+    # The region lies inside the circle, so it is built on the circle's box (shifting the
+    # centre by the box's integer origin is exact: the same circle). Only the extent test
+    # looks further, at the person's non-skin pixels in the whole region of interest; the
+    # region is a subset of them, so one hue-code image serves both.
+    box = circle_box(centre, radius, foreground.shape)
+    box_origin = np.array([box[1].start, box[0].start], np.float64)
+    region = hand_region(foreground[box], skin[box], blob[box], centre - box_origin, radius)
+    person_codes = pixel_hue_codes(
+        bgr[y0:y1, x0:x1], cfg.min_saturation, cfg.min_value, mask=foreground & ~skin
+    )
     pdf, modes = region_mode_pdf(
-        hues,
+        person_codes[box],
         region,
         n_bins=cfg.hue_bins,
         sigma_deg=cfg.kde_sigma_deg,
         min_peak=cfg.mode_min_peak,
         halfwidth_deg=cfg.mode_halfwidth_deg,
         min_pixels=cfg.mode_min_pixels,
-        outer_hue_img=outer,
+        outer_hue_codes=person_codes,
+        region_box=box,
         max_extent=cfg.max_mode_extent,
     )
     return HandView(
         camera=camera.name,
         centre_px=centre + origin,
-        radius_px=float(radii[k]),
+        radius_px=radius,
         rho=float(reliability(bg[k], cfg.rho_min)),
         pdf=pdf,
         modes_deg=modes,

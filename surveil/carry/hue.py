@@ -1,9 +1,12 @@
 """Hue histograms and their modes (paper 004 section 7.2.2).
 
-Pure, vectorised functions on small image regions. Hue is in degrees ``[0, 360)``; OpenCV's
-8-bit hue (0-179) is doubled at the edge (:func:`pixel_hues`). Histograms are circular: bin
-``i`` of ``B`` is centred on ``i * 360 / B`` degrees and covers half a bin either side, so
-bin 0 straddles 0/360.
+Pure, vectorised functions on small image regions. Hue is in degrees ``[0, 360)`` wherever it
+leaves this module (modes, histogram bins). Inside, images hold *hue codes*: OpenCV's 8-bit hue
+(0-179, half the hue in degrees) as uint8, with :data:`NO_HUE` for pixels without a reliable
+hue or outside the pixels of interest (:func:`pixel_hue_codes`). With only 180 possible hues,
+a per-pixel test against a mode becomes a 256-entry table lookup (:func:`codes_near_hues`)
+instead of float arithmetic on every pixel. Histograms are circular: bin ``i`` of ``B`` is
+centred on ``i * 360 / B`` degrees and covers half a bin either side, so bin 0 straddles 0/360.
 """
 
 from __future__ import annotations
@@ -12,38 +15,82 @@ import cv2
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
-from surveil.validate import require_shape
+from surveil.validate import readonly, require_shape
+
+NO_HUE = 255
+"""Hue code of a pixel that has no reliable hue (grey, dark) or is not to be analysed."""
+
+HUE_CODE_DEG = np.arange(180, dtype=np.float32) * np.float32(2.0)
+"""(180,) float32: the hue in degrees of each hue code (OpenCV 8-bit hue x 2)."""
+readonly(HUE_CODE_DEG)
 
 
-def pixel_hues(bgr: np.ndarray, min_saturation: float, min_value: float) -> np.ndarray:
-    """Hue of every pixel, NaN where the colour is too grey or too dark to have one.
+def pixel_hue_codes(
+    bgr: np.ndarray, min_saturation: float, min_value: float, mask: np.ndarray | None = None
+) -> np.ndarray:
+    """Hue code of every pixel: OpenCV 8-bit hue, or :data:`NO_HUE`.
 
     Parameters
     ----------
     bgr : (H, W, 3) uint8
         BGR image (normally a small region of interest).
     min_saturation, min_value : float
-        HSV saturation and value thresholds in [0, 1]; pixels below either get NaN.
+        HSV saturation and value thresholds in [0, 1]; pixels below either get ``NO_HUE``
+        (too grey or too dark to have a hue).
+    mask : (H, W) bool, optional
+        The pixels of interest; the others get ``NO_HUE``. Default: all.
 
     Returns
     -------
-    (H, W) float32
-        Hue in degrees, ``[0, 360)`` in steps of 2 (OpenCV 8-bit hue x 2), or NaN.
+    (H, W) uint8
+        Hue in degrees / 2, in ``0..179`` (:data:`HUE_CODE_DEG` maps it to degrees), or
+        ``NO_HUE``.
 
     Examples
     --------
     >>> img = np.array([[[0, 255, 0], [128, 128, 128], [0, 0, 200]]], np.uint8)  # BGR
-    >>> pixel_hues(img, 0.3, 0.1).tolist()
-    [[120.0, nan, 0.0]]
+    >>> codes = pixel_hue_codes(img, 0.3, 0.1)
+    >>> codes.tolist(), HUE_CODE_DEG[codes[0, 0]]  # green, grey, red
+    ([[60, 255, 0]], np.float32(120.0))
+    >>> pixel_hue_codes(img, 0.3, 0.1, mask=np.array([[False, True, True]])).tolist()
+    [[255, 255, 0]]
     """
     require_shape("bgr", bgr, (None, None, 3), np.uint8)
+    if mask is not None:
+        require_shape("mask", mask, bgr.shape[:2], np.bool_)
     hsv = cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV)
-    hue = hsv[..., 0].astype(np.float32) * 2.0
-    s_min = np.ceil(min_saturation * 255.0)
-    v_min = np.ceil(min_value * 255.0)
-    unreliable = (hsv[..., 1] < s_min) | (hsv[..., 2] < v_min)
-    hue[unreliable] = np.nan
-    return hue
+    # integer bounds: inRange rounds a fractional bound to the nearest integer, which could
+    # admit pixels just below the threshold
+    s_min = int(np.ceil(min_saturation * 255.0))
+    v_min = int(np.ceil(min_value * 255.0))
+    has_hue = cv2.inRange(hsv, (0, s_min, v_min), (255, 255, 255)) > 0
+    if mask is not None:
+        has_hue &= mask
+    return np.where(has_hue, hsv[..., 0], np.uint8(NO_HUE))
+
+
+def codes_near_hues(hues_deg: np.ndarray, halfwidth_deg: float) -> np.ndarray:
+    """Which hue codes lie within ``+-halfwidth_deg`` of each of some hues (circularly).
+
+    Parameters
+    ----------
+    hues_deg : (M,) float
+        Hues, degrees.
+    halfwidth_deg : float
+
+    Returns
+    -------
+    (M, 256) bool
+        Row m indexed by hue code: ``codes_near_hues(h, d)[m][codes]`` is the mask of the
+        pixels whose hue is near ``h[m]``. ``NO_HUE`` (and every code above 179) is False.
+
+    >>> np.flatnonzero(codes_near_hues(np.array([1.0]), 3.0)[0]).tolist()  # 358, 0, 2, 4 deg
+    [0, 1, 2, 179]
+    """
+    hues = np.asarray(hues_deg, np.float64).reshape(-1, 1)
+    tables = np.zeros((len(hues), 256), bool)
+    tables[:, : len(HUE_CODE_DEG)] = circular_distance_deg(HUE_CODE_DEG, hues) <= halfwidth_deg
+    return tables
 
 
 def hue_to_bins(hues_deg: np.ndarray, n_bins: int) -> np.ndarray:
@@ -76,7 +123,13 @@ def circular_distance_deg(a: np.ndarray | float, b: np.ndarray | float) -> np.nd
     return np.minimum(d, 360.0 - d)
 
 
-def hue_histogram(hues_deg: np.ndarray, n_bins: int, n_total: int | None = None) -> np.ndarray:
+def hue_histogram(
+    hues_deg: np.ndarray,
+    n_bins: int,
+    n_total: int | None = None,
+    *,
+    weights: np.ndarray | None = None,
+) -> np.ndarray:
     """Circular hue histogram normalised by a pixel count.
 
     Parameters
@@ -87,25 +140,40 @@ def hue_histogram(hues_deg: np.ndarray, n_bins: int, n_total: int | None = None)
         Number of bins B over ``[0, 360)``.
     n_total : int, optional
         Divide the counts by this (e.g. all pixels of the region, including those without a
-        reliable hue, so that the histogram is a share of the region). Default ``N``.
+        reliable hue, so that the histogram is a share of the region). Default: the number of
+        pixels, ``N`` or ``weights.sum()``.
+    weights : (N,) int or float, optional
+        Pixels per hue (e.g. a count per hue code with ``hues_deg`` = :data:`HUE_CODE_DEG`).
+        Default: one pixel each.
 
     Returns
     -------
     (B,) float64
-        Counts / ``n_total``; sums to 1 when every hue is finite and ``n_total`` is N.
+        Counts / ``n_total``; sums to 1 when every hue is finite and ``n_total`` is the default.
         All zeros for an empty input.
 
     >>> hue_histogram(np.array([0.0, 359.5, 120.0, np.nan]), 4).tolist()
     [0.5, 0.25, 0.0, 0.0]
+    >>> hue_histogram(np.array([0.0, 120.0]), 4, weights=np.array([3, 1])).tolist()
+    [0.75, 0.25, 0.0, 0.0]
     """
     hues = np.asarray(hues_deg, np.float64).reshape(-1)
     if n_bins < 1:
         raise ValueError(f"n_bins must be >= 1, got {n_bins}")
-    total = len(hues) if n_total is None else int(n_total)
-    finite = hues[np.isfinite(hues)]
-    if total <= 0 or len(finite) == 0:
+    if weights is not None:
+        require_shape("weights", weights, hues.shape, np.number)
+    if n_total is not None:
+        total = int(n_total)
+    else:
+        total = len(hues) if weights is None else weights.sum()
+    finite = np.isfinite(hues)
+    if total <= 0 or not finite.any():
         return np.zeros(n_bins)
-    counts = np.bincount(hue_to_bins(finite, n_bins), minlength=n_bins)
+    bins = hue_to_bins(hues[finite], n_bins)
+    # bincount sums weights in float64; sums of pixel counts stay exact integers
+    counts = np.bincount(
+        bins, weights=None if weights is None else weights[finite], minlength=n_bins
+    )
     return counts / float(total)
 
 
@@ -160,7 +228,7 @@ def find_modes(density: np.ndarray, min_peak: float = 0.0) -> np.ndarray:
     [0, 3]
     """
     d = np.asarray(density, np.float64)
-    left, right = np.roll(d, 1), np.roll(d, -1)
+    left, right = _circular_neighbours(d)
     idx = np.flatnonzero((d > left) & (d >= right) & (d >= min_peak))
     return idx[np.argsort(-d[idx], kind="stable")]
 
@@ -181,36 +249,59 @@ def mode_basins(density: np.ndarray) -> np.ndarray:
     """
     d = np.asarray(density, np.float64)
     n = len(d)
-    i = np.arange(n)
-    cand = np.stack([i, (i - 1) % n, (i + 1) % n])  # self first: ties stay put
-    step = cand[np.argmax(d[cand], axis=0), i]
+    left, right = _circular_neighbours(d)
+    # self first: ties stay put
+    move = np.array([0, -1, 1])[np.argmax(np.stack([d, left, right]), axis=0)]
+    step = (np.arange(n) + move) % max(n, 1)
     for _ in range(max(int(np.ceil(np.log2(max(n, 2)))) + 1, 1)):
         step = step[step]
     return step
 
 
-def refine_peak_deg(density: np.ndarray, peak_bin: int) -> float:
-    """Sub-bin hue of a maximum by a parabola through it and its two neighbours, degrees.
+def _circular_neighbours(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(d[i - 1], d[i + 1])`` for every bin of a circular array (cheaper than two np.roll)."""
+    ring = np.concatenate((d[-1:], d, d[:1]))
+    return ring[:-2], ring[2:]
+
+
+def refine_peaks_deg(density: np.ndarray, peak_bins: np.ndarray) -> np.ndarray:
+    """Sub-bin hues of maxima by a parabola through each and its two neighbours, degrees.
+
+    Parameters
+    ----------
+    density : (B,) float
+        A circular density.
+    peak_bins : (M,) int
+        Its maxima (e.g. :func:`find_modes`).
+
+    Returns
+    -------
+    (M,) float64
+        Hues in ``[0, 360)``; a peak moves at most half a bin.
 
     >>> d = np.array([0.0, 1.0, 3.0, 3.0, 1.0, 0.0])
-    >>> refine_peak_deg(d, 2)  # the true peak lies between bins 2 and 3 (120 and 180 deg)
-    150.0
+    >>> refine_peaks_deg(d, np.array([2])).tolist()  # between bins 2 and 3 (120 and 180 deg)
+    [150.0]
     """
     d = np.asarray(density, np.float64)
+    peaks = np.asarray(peak_bins, np.int64).reshape(-1)
     n = len(d)
-    y0, y1, y2 = d[(peak_bin - 1) % n], d[peak_bin], d[(peak_bin + 1) % n]
+    y0, y1, y2 = d[(peaks - 1) % n], d[peaks], d[(peaks + 1) % n]
     denom = y0 - 2.0 * y1 + y2
-    offset = 0.0 if denom >= 0 else float(np.clip(0.5 * (y0 - y2) / denom, -0.5, 0.5))
-    return float(((peak_bin + offset) * 360.0 / n) % 360.0)
+    is_peaked = denom < 0  # else flat or not a maximum: no parabola vertex, no offset
+    vertex = np.clip(0.5 * (y0 - y2) / np.where(is_peaked, denom, -1.0), -0.5, 0.5)
+    offset = np.where(is_peaked, vertex, 0.0)
+    return ((peaks + offset) * 360.0 / n) % 360.0
 
 
 def connected_modes(
-    hue_img: np.ndarray,
+    hue_codes: np.ndarray,
     modes_deg: np.ndarray,
     halfwidth_deg: float,
     min_pixels: int,
     *,
-    outer_hue_img: np.ndarray | None = None,
+    outer_hue_codes: np.ndarray | None = None,
+    region_box: tuple[slice, slice] | None = None,
     max_extent: float = 0.0,
 ) -> np.ndarray:
     """Connectivity check of section 7.2.2: is each mode a compact patch in the image?
@@ -221,21 +312,26 @@ def connected_modes(
 
     Parameters
     ----------
-    hue_img : (H, W) float
-        Hue per pixel in degrees; NaN for pixels outside the region or without a hue.
+    hue_codes : (H, W) uint8
+        Hue code per pixel (:func:`pixel_hue_codes`); ``NO_HUE`` outside the region and for
+        pixels without a hue.
     modes_deg : (M,) float
         Mode hues, degrees.
     halfwidth_deg : float
         delta (paper: about 3 degrees).
     min_pixels : int
         n (paper: 10).
-    outer_hue_img : (H, W) float, optional
-        Hues of a larger neighbourhood (NaN outside it) that contains ``hue_img``'s pixels.
+    outer_hue_codes : (H', W') uint8, optional
+        Hue codes of a larger neighbourhood (``NO_HUE`` outside it) that contains the region.
         With ``max_extent > 0``, a mode is also dropped when its patches, followed into this
         neighbourhood, are more than ``max_extent`` times larger than inside the region: the
         colour belongs to something that extends beyond the hand's circle (dress, trousers,
         furniture) rather than to a compact carried object. (An addition to the paper, which
         removes the sleeve where it crosses the bounding circle.)
+    region_box : (slice, slice), optional
+        Rows and columns of ``outer_hue_codes`` that ``hue_codes`` covers; default: all (the
+        two images have the same shape). The connectivity check then runs on the small
+        region image, and only the extent test on the neighbourhood.
     max_extent : float
         0 disables the extent test.
 
@@ -245,39 +341,53 @@ def connected_modes(
 
     Examples
     --------
-    >>> img = np.full((20, 20), np.nan, np.float32)
-    >>> img[2:6, 2:6] = 120.0           # a compact 16-pixel patch
-    >>> img[10::3, 0::3] = 240.0        # 21 isolated pixels
+    >>> img = np.full((20, 20), NO_HUE, np.uint8)
+    >>> img[2:6, 2:6] = 60              # a compact 16-pixel patch, 120 deg
+    >>> img[10::3, 0::3] = 120          # 21 isolated pixels, 240 deg
     >>> connected_modes(img, np.array([120.0, 240.0]), 3.0, 10).tolist()
     [True, False]
-    >>> outer = np.full((20, 20), 120.0, np.float32)  # the patch continues far outside
-    >>> connected_modes(img, np.array([120.0]), 3.0, 10, outer_hue_img=outer,
-    ...                 max_extent=3.0).tolist()
+    >>> outer = np.full((30, 30), 60, np.uint8)  # the patch continues far outside
+    >>> connected_modes(img, np.array([120.0]), 3.0, 10, outer_hue_codes=outer,
+    ...                 region_box=np.s_[5:25, 5:25], max_extent=3.0).tolist()
     [False]
     """
-    require_shape("hue_img", hue_img, (None, None), np.floating)
+    require_shape("hue_codes", hue_codes, (None, None), np.uint8)
     modes = np.asarray(modes_deg, np.float64).reshape(-1)
     keep = np.zeros(len(modes), bool)
-    if hue_img.size == 0:
+    if hue_codes.size == 0:
         return keep
-    for k, mode in enumerate(modes):  # a handful of modes; each test is one OpenCV call
-        near = circular_distance_deg(hue_img, mode) <= halfwidth_deg  # NaN -> False
-        if np.count_nonzero(near) < min_pixels:
+    extent_test = outer_hue_codes is not None and max_extent > 0
+    if extent_test:
+        require_shape("outer_hue_codes", outer_hue_codes, (None, None), np.uint8)
+        if region_box is None:
+            region_box = (slice(None), slice(None))
+        if outer_hue_codes[region_box].shape != hue_codes.shape:
+            raise ValueError(
+                f"region_box must select a {hue_codes.shape} part of outer_hue_codes "
+                f"{outer_hue_codes.shape}, got {region_box}"
+            )
+    # a handful of modes; each test is one OpenCV call (two with the extent test)
+    for k, is_near in enumerate(codes_near_hues(modes, halfwidth_deg)):
+        near = is_near[hue_codes]
+        n_near = np.count_nonzero(near)
+        if n_near < min_pixels:
             continue
-        _, _, stats, _ = cv2.connectedComponentsWithStats(near.view(np.uint8), connectivity=8)
-        keep[k] = stats[1:, cv2.CC_STAT_AREA].max() >= min_pixels
-        if keep[k] and outer_hue_img is not None and max_extent > 0:
-            far = (circular_distance_deg(outer_hue_img, mode) <= halfwidth_deg) | near
-            _, labels = cv2.connectedComponents(far.view(np.uint8), connectivity=8)
-            hit = np.zeros(int(labels.max()) + 1, bool)
-            hit[labels[near]] = True
-            hit[0] = False
-            keep[k] = np.count_nonzero(hit[labels]) <= max_extent * np.count_nonzero(near)
+        n_patches, patches = cv2.connectedComponents(near.view(np.uint8), connectivity=8)
+        patch_px = np.bincount(patches.reshape(-1), minlength=n_patches)
+        keep[k] = patch_px[1:].max() >= min_pixels
+        if keep[k] and extent_test:
+            far = is_near[outer_hue_codes]
+            far[region_box] |= near
+            n_far, far_patches = cv2.connectedComponents(far.view(np.uint8), connectivity=8)
+            reached = np.zeros(n_far, bool)
+            reached[far_patches[region_box][near]] = True
+            reached[0] = False
+            keep[k] = np.count_nonzero(reached[far_patches]) <= max_extent * n_near
     return keep
 
 
 def region_mode_pdf(
-    hue_img: np.ndarray,
+    hue_codes: np.ndarray,
     region: np.ndarray,
     *,
     n_bins: int,
@@ -285,7 +395,8 @@ def region_mode_pdf(
     min_peak: float,
     halfwidth_deg: float,
     min_pixels: int,
-    outer_hue_img: np.ndarray | None = None,
+    outer_hue_codes: np.ndarray | None = None,
+    region_box: tuple[slice, slice] | None = None,
     max_extent: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The hue distribution of a region, restricted to its connected modes.
@@ -297,15 +408,17 @@ def region_mode_pdf(
 
     Parameters
     ----------
-    hue_img : (H, W) float
-        Hue per pixel in degrees, NaN where unreliable (see :func:`pixel_hues`).
+    hue_codes : (H, W) uint8
+        Hue code per pixel, ``NO_HUE`` where unreliable (see :func:`pixel_hue_codes`).
     region : (H, W) bool
         The pixels to analyse.
     n_bins, sigma_deg, min_peak, halfwidth_deg, min_pixels, max_extent
         See :class:`surveil.carry.settings.CarryConfig` (``hue_bins``, ``kde_sigma_deg``,
         ``mode_min_peak``, ``mode_halfwidth_deg``, ``mode_min_pixels``, ``max_mode_extent``).
-    outer_hue_img : (H, W) float, optional
-        Hues around the region for the extent test of :func:`connected_modes`.
+    outer_hue_codes : (H', W') uint8, optional
+        Hue codes around the region for the extent test of :func:`connected_modes`.
+    region_box : (slice, slice), optional
+        Where ``hue_codes`` lies in ``outer_hue_codes`` (default: the same shape).
 
     Returns
     -------
@@ -316,32 +429,36 @@ def region_mode_pdf(
 
     Examples
     --------
-    >>> hue = np.full((12, 12), 30.0, np.float32); hue[3:8, 3:8] = 120.0
-    >>> pdf, modes = region_mode_pdf(hue, np.ones((12, 12), bool), n_bins=180, sigma_deg=4,
+    >>> codes = np.full((12, 12), 15, np.uint8); codes[3:8, 3:8] = 60  # 30 and 120 deg
+    >>> pdf, modes = region_mode_pdf(codes, np.ones((12, 12), bool), n_bins=180, sigma_deg=4,
     ...                              min_peak=0.0, halfwidth_deg=3, min_pixels=10)
     >>> modes.round().tolist(), round(float(pdf.sum()), 3)
     ([30.0, 120.0], 1.0)
     """
-    require_shape("region", region, hue_img.shape, np.bool_)
+    require_shape("hue_codes", hue_codes, (None, None), np.uint8)
+    require_shape("region", region, hue_codes.shape, np.bool_)
     n_region = int(np.count_nonzero(region))
     if n_region == 0:
         return np.zeros(n_bins), np.zeros(0)
-    hues = hue_img[region]
-    hist = hue_histogram(hues, n_bins, n_total=n_region)
+    region_codes = np.where(region, hue_codes, np.uint8(NO_HUE))
+    pixels_per_code = np.bincount(region_codes.reshape(-1), minlength=256)[: len(HUE_CODE_DEG)]
+    hist = hue_histogram(HUE_CODE_DEG, n_bins, n_total=n_region, weights=pixels_per_code)
     density = smooth_circular(hist, sigma_deg)
     modes = find_modes(density, min_peak)
     if len(modes) == 0:
         return np.zeros(n_bins), np.zeros(0)
-    modes_deg = np.array([refine_peak_deg(density, m) for m in modes])
-    masked = np.where(region, hue_img, np.float32(np.nan))
+    modes_deg = refine_peaks_deg(density, modes)
     keep = connected_modes(
-        masked,
+        region_codes,
         modes_deg,
         halfwidth_deg,
         min_pixels,
-        outer_hue_img=outer_hue_img,
+        outer_hue_codes=outer_hue_codes,
+        region_box=region_box,
         max_extent=max_extent,
     )
+    if not keep.any():  # common (a bare hand beside clothing): no basins to follow
+        return np.zeros(n_bins), np.zeros(0)
     kept_bins = np.zeros(n_bins, bool)
     kept_bins[modes[keep]] = True
     pdf = np.where(kept_bins[mode_basins(density)], density, 0.0)

@@ -16,7 +16,9 @@ from surveil.carry import (
     CarryConfig,
     analyse_hand_view,
     choose_radius,
+    circle_box,
     find_hand_blob,
+    hand_region,
     rim_background_fraction,
 )
 from surveil.datatypes import CameraObservation, Limb, Phase, TargetSnapshot
@@ -85,6 +87,28 @@ def test_rim_fraction_and_radius_choice():
     assert choose_radius(np.array([0.0, 0.05]), 0.5, 0.2) == 0  # inside: smallest
     with pytest.raises(ValueError, match="background_fractions"):
         choose_radius(np.zeros(0), 0.5, 0.2)
+
+
+@pytest.mark.parametrize(
+    ("centre", "radius"),
+    [((20.3, 15.7), 6.2), ((0.4, 0.5), 9.0), ((39.9, 29.2), 5.0), ((10.0, 10.0), 10.0)],
+)
+def test_circle_box_holds_the_whole_circle_and_the_region_built_on_it(centre, radius):
+    shape = (30, 40)
+    centre = np.array(centre)
+    box = circle_box(centre, radius, shape)
+    circle = disc(shape, centre, radius)
+    assert circle[box].sum() == circle.sum()
+    # the region built on the box equals the region built on the whole image
+    rng = np.random.default_rng(0)
+    fg = rng.random(shape) < 0.7
+    skin = rng.random(shape) < 0.2
+    blob = disc(shape, centre, 2.5)
+    full = hand_region(fg, skin, blob, centre, radius)
+    origin = np.array([box[1].start, box[0].start], float)
+    boxed = hand_region(fg[box], skin[box], blob[box], centre - origin, radius)
+    assert full.any() and full[box].sum() == full.sum()
+    np.testing.assert_array_equal(boxed, full[box])
 
 
 def test_find_hand_blob_prefers_the_blob_under_the_point():
