@@ -161,7 +161,12 @@ class Pipeline:
         observations = self._observe(fs, timings)
         learning = any(bg.learning for bg in self.backgrounds.values())
         t0 = time.perf_counter()
-        candidates = make_candidates(list(observations.values()), self.rig, self.cfg.candidates)
+        candidates = make_candidates(
+            list(observations.values()),
+            self.rig,
+            self.cfg.candidates,
+            expected_m=self.tracker.expected_hands(fs.t_ns),
+        )
         t1 = time.perf_counter()
         track = self.tracker.step(fs.t_ns, candidates, observations)
         t2 = time.perf_counter()

@@ -172,8 +172,55 @@ def explain_away(support: np.ndarray, prior: np.ndarray) -> np.ndarray:
     return keep
 
 
+def rescue_expected(
+    points_m: np.ndarray,
+    prior: np.ndarray,
+    keep: np.ndarray,
+    expected_m: np.ndarray,
+    radius_m: float,
+) -> np.ndarray:
+    """(K,) bool: ``keep`` plus, for every expected position that explaining away left with
+    no candidate within ``radius_m``, the strongest still-dropped candidate within
+    ``radius_m`` of it (two targets expected side by side each get their own).
+
+    Explaining away lets each blob explain one point, but two hands whose blobs merged in all
+    views but one are two points sharing blobs: the second hand's candidate is dropped as a
+    ghost although a tracker expects a hand right there. Rescuing only next to an expected
+    position that would otherwise go without a candidate keeps the ghosts out elsewhere.
+
+    Parameters
+    ----------
+    points_m : (K, 3) float
+    prior : (K,) float
+    keep : (K,) bool -- :func:`explain_away`'s verdict
+    expected_m : (E, 3) float -- where tracked targets are expected in this frame set, m
+    radius_m : float
+
+    Examples
+    --------
+    >>> pts = np.array([[0.0, 0, 1], [0.25, 0, 1], [0.3, 0, 1]])
+    >>> keep = np.array([True, False, False])
+    >>> rescue_expected(pts, np.array([0.9, 0.5, 0.7]), keep, np.array([[0.28, 0, 1]]),
+    ...                 0.1).tolist()
+    [True, False, True]
+    """
+    keep = keep.copy()
+    if len(expected_m) == 0 or len(points_m) == 0 or radius_m <= 0:
+        return keep
+    near = np.linalg.norm(points_m[:, None] - expected_m[None], axis=2) < radius_m  # (K, E)
+    for e in np.flatnonzero(~(near & keep[:, None]).any(axis=0)):
+        dropped = np.flatnonzero(near[:, e] & ~keep)
+        if len(dropped):
+            keep[dropped[np.argmax(prior[dropped])]] = True
+    return keep
+
+
 def make_candidates(
-    observations: Sequence[CameraObservation], rig: Rig, cfg: CandidateConfig
+    observations: Sequence[CameraObservation],
+    rig: Rig,
+    cfg: CandidateConfig,
+    *,
+    expected_m: np.ndarray | None = None,
 ) -> CandidateSet:
     """3-D candidate points of one frame set with their priors p(Z).
 
@@ -186,6 +233,10 @@ def make_candidates(
         The calibrated cameras; every ``observation.camera`` must be one of them.
     cfg : CandidateConfig
         Widths, thresholds and merging.
+    expected_m : (E, 3) float or None
+        Where tracked targets are predicted to be in this frame set, m (the tracker's
+        feedback): explaining away spares the strongest candidate near each of them that
+        would otherwise have none (:func:`rescue_expected`, ``cfg.expected_radius_m``).
 
     Returns
     -------
@@ -291,6 +342,8 @@ def make_candidates(
     if cfg.explain_away:
         support = _view_support(points, cam_pairs, blob_pairs, rig, by_cam, cfg.support_radius_px)
         real = explain_away(support, prior)
+        if expected_m is not None:
+            real = rescue_expected(points, prior, real, expected_m, cfg.expected_radius_m)
         points, prior, half_gap = points[real], prior[real], half_gap[real]
         cam_pairs, blob_pairs = cam_pairs[real], blob_pairs[real]
     log.debug(

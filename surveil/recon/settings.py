@@ -54,6 +54,13 @@ class CandidateConfig:
         "(each blob explains one point; docs/candidates.md). Not in the paper: it removed 70 % "
         "of the false candidates on the exchange and demo scenes for 4 points of recall",
     )
+    expected_radius_m: float = setting(
+        0.2,
+        "explaining away spares the strongest candidate within this of a tracked target's "
+        "predicted position that has no other (a hand whose blob merged with another limb's "
+        "in most views); 0 = off, m",
+        min=0.0,
+    )
     support_radius_px: float = setting(
         8.0,
         "a blob whose centroid is within this of a candidate's projection supports it, px",

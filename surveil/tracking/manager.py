@@ -869,6 +869,19 @@ class MultiTargetTracker:
 
     # ------------------------------------------------------------------ introspection
 
+    def expected_hands(self, t_ns: int) -> np.ndarray:
+        """(E, 3) where the active trackers not typed as heads are predicted to be at time
+        ``t_ns`` (constant velocity from their estimates), m: the candidate stage's feedback
+        (heads are big blobs that rarely lose their candidate)."""
+        dt_s = 0.0 if self._last_t_ns is None else (int(t_ns) - self._last_t_ns) * 1e-9
+        dt_s = min(max(dt_s, 0.0), self.cfg.filter.max_dt_s)
+        out = [
+            tr.mean_m + tr.vel_mps * dt_s
+            for tr in self._tracks.values()
+            if tr.phase in ACTIVE and tr.is_hand is not False
+        ]
+        return np.array(out).reshape(-1, 3)
+
     @property
     def n_live(self) -> int:
         """Number of trackers that are not uninitialised."""

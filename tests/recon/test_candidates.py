@@ -12,7 +12,7 @@ from surveil.camera import Camera, Rig, look_at
 from surveil.config import from_table
 from surveil.datatypes import BlobSet, CameraObservation, CandidateSet, Silhouettes
 from surveil.errors import ConfigError
-from surveil.recon.candidates import _merge, explain_away, make_candidates
+from surveil.recon.candidates import _merge, explain_away, make_candidates, rescue_expected
 from surveil.recon.settings import CandidateConfig
 
 W, H = 320, 240
@@ -123,6 +123,42 @@ def test_crossing_lines_of_sight_of_two_limbs_are_explained_away(enabled):
     to_ghost = np.linalg.norm(cs.points_m - g, axis=1)
     assert (to_limb < 1e-3).sum() >= 2  # both limbs found either way
     assert (to_ghost < 0.01).any() != enabled
+
+
+def test_expected_position_spares_the_dropped_candidate_next_to_it():
+    """Explaining away drops G; a tracker that expects a target 5 cm from G gets it back, one
+    that expects a target at limb A (which has its candidate) or far from everything adds
+    nothing."""
+    rig = _rig()
+    a, b, g = _exact_ghost(rig)
+    obs = [
+        _observation(
+            cam, np.stack([a, b]), rel_v=np.full(2, 0.5), silhouette_at_m=np.stack([a, b, g])
+        )
+        for cam in rig
+    ]
+    plain = make_candidates(obs, rig, CFG)
+    for expected, ghost_back in (
+        ([g + [0.05, 0, 0]], True),
+        ([a], False),
+        ([[0.5, 0.5, 1]], False),
+    ):
+        cs = make_candidates(obs, rig, CFG, expected_m=np.array(expected))
+        assert (np.linalg.norm(cs.points_m - g, axis=1) < 0.01).any() == ghost_back
+        assert len(cs.points_m) == len(plain.points_m) + ghost_back
+
+
+def test_rescue_gives_each_expected_position_its_own_strongest_dropped_candidate():
+    pts = np.array([[0.0, 0, 1], [0.1, 0, 1], [0.12, 0, 1], [1.0, 0, 1]])
+    prior = np.array([0.9, 0.4, 0.6, 0.8])
+    keep = np.array([False, False, False, True])
+    # two hands expected side by side: the stronger nearby candidate, then the other one
+    out = rescue_expected(pts, prior, keep, np.array([[0.1, 0, 1], [0.11, 0, 1]]), 0.05)
+    assert out.tolist() == [False, True, True, True]
+    assert keep.tolist() == [False, False, False, True]  # the input is not modified
+    one = rescue_expected(pts, prior, keep, np.array([[0.1, 0, 1]]), 0.05)
+    assert one.tolist() == [False, False, True, True]
+    assert rescue_expected(pts, prior, keep, np.zeros((0, 3)), 0.05).tolist() == keep.tolist()
 
 
 def test_explain_away_keeps_a_limb_hidden_in_one_view():

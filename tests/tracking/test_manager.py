@@ -244,6 +244,16 @@ def test_stray_candidates_beside_joined_hands_do_not_part_them(rig, rng):
     assert len(splits) == 2 and min(splits) > max(joined)
 
 
+def test_expected_hands_extrapolates_moving_targets_for_the_candidate_stage(rig, rng):
+    trk = MultiTargetTracker(LONE, rig, seed=1)
+    truth = [np.array([1.0 + i / 15, 2.0, 1.0]) for i in range(31)]  # 1 m/s along x
+    run(trk, [[p] for p in truth[:30]], rng)
+    expected = trk.expected_hands(30 * DT_NS)
+    assert expected.shape == (1, 3)
+    assert np.linalg.norm(expected[0] - truth[30]) < 0.03  # where it will be, not where it was
+    assert MultiTargetTracker(LONE, rig, seed=1).expected_hands(0).shape == (0, 3)
+
+
 def test_same_seed_same_output_and_skipped_frames(rig):
     frames = two_people_frames(30, b_from=5)
 
