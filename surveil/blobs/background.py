@@ -14,6 +14,7 @@ import logging
 import cv2
 import numpy as np
 
+from surveil.blobs.components import components_with_stats
 from surveil.blobs.settings import BackgroundConfig
 from surveil.datatypes import Silhouettes
 from surveil.validate import require_shape
@@ -53,7 +54,7 @@ def silhouettes_from_mask(foreground: np.ndarray, min_area_px: int) -> Silhouett
     require_shape("foreground", foreground, (None, None), np.generic)
     fg = foreground.astype(np.uint8, copy=False)
     h, w = fg.shape
-    n_all, labels, stats, _ = cv2.connectedComponentsWithStats(fg, connectivity=8)
+    n_all, labels, stats, _ = components_with_stats(fg)
     keep = np.flatnonzero(stats[:, cv2.CC_STAT_AREA] >= max(min_area_px, 1))
     keep = keep[keep > 0]  # component 0 is the background
     relabel = np.zeros(n_all, np.int32)

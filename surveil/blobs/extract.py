@@ -8,6 +8,7 @@ import cv2
 import numpy as np
 
 from surveil.blobs.background import BackgroundModel
+from surveil.blobs.components import components_with_stats
 from surveil.blobs.settings import BlobConfig
 from surveil.blobs.skin import SkinModel
 from surveil.datatypes import BlobSet, CameraObservation, Silhouettes
@@ -63,9 +64,7 @@ def extract_blobs(
         # grey dilation grows every label (overlaps go to the larger label)
         sil = cv2.dilate(sil.astype(np.uint16), kernel).astype(np.int32)
     inside = skin & (sil > 0)
-    n_all, labels, stats, centroids = cv2.connectedComponentsWithStats(
-        inside.view(np.uint8), connectivity=8
-    )
+    n_all, labels, stats, centroids = components_with_stats(inside)
     areas = stats[1:, cv2.CC_STAT_AREA].astype(np.int64)
     ok = np.flatnonzero(areas >= max(cfg.min_blob_area_px, 1))
     if cfg.max_blob_area_rel > 0 and len(ok) and silhouettes.n:
