@@ -194,8 +194,7 @@ class MultiTargetTracker:
             raise ValueError(
                 f"t_ns must not decrease between steps: got {t_ns} after {self._last_t_ns}"
             )
-        dt_s = 0.0 if self._last_t_ns is None else (t_ns - self._last_t_ns) * 1e-9
-        dt_s = min(dt_s, self.cfg.filter.max_dt_s)
+        dt_s = self._step_s(t_ns)
         self._last_t_ns = t_ns
         pts = np.asarray(candidates.points_m, dtype=np.float64)
         prior = np.asarray(candidates.prior, dtype=np.float64)
@@ -210,6 +209,11 @@ class MultiTargetTracker:
         transitions = self._advance_phases(t_ns, pairs, drifted, reacquired)
         transitions += self._initialise(seeds, set(reacquired.values()), t_ns)
         return self._frame(t_ns, transitions)
+
+    def _step_s(self, t_ns: int) -> float:
+        """Time step from the previous frame set to ``t_ns``, at most ``max_dt_s`` (0 first)."""
+        dt_s = 0.0 if self._last_t_ns is None else (t_ns - self._last_t_ns) * 1e-9
+        return min(dt_s, self.cfg.filter.max_dt_s)
 
     # ------------------------------------------------------------------ 1-2: SIR filters
 
@@ -873,8 +877,7 @@ class MultiTargetTracker:
         """(E, 3) where the active trackers not typed as heads are predicted to be at time
         ``t_ns`` (constant velocity from their estimates), m: the candidate stage's feedback
         (heads are big blobs that rarely lose their candidate)."""
-        dt_s = 0.0 if self._last_t_ns is None else (int(t_ns) - self._last_t_ns) * 1e-9
-        dt_s = min(max(dt_s, 0.0), self.cfg.filter.max_dt_s)
+        dt_s = max(self._step_s(int(t_ns)), 0.0)
         out = [
             tr.mean_m + tr.vel_mps * dt_s
             for tr in self._tracks.values()
