@@ -25,7 +25,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from surveil.blobs.background import BackgroundModel
+from surveil.blobs.background import BackgroundModel, learning_frames_after
 from surveil.blobs.extract import extract_blobs
 from surveil.blobs.settings import BackgroundConfig, BlobConfig
 from surveil.blobs.skin import default_skin_model
@@ -56,7 +56,9 @@ def bench_recording(rec_dir: Path, max_frames: int | None) -> dict:
             if img is None:
                 continue
             if cam not in models:
-                models[cam] = BackgroundModel(bg_cfg, img.shape[:2])
+                models[cam] = BackgroundModel(
+                    bg_cfg, img.shape[:2], learning_frames_after(bg_cfg, fs.index)
+                )
             t0 = time.perf_counter()
             sil = models[cam].step(img)
             t1 = time.perf_counter()

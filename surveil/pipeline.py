@@ -21,7 +21,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from surveil.activity import ActivityEngine, RuleSet
-from surveil.blobs.background import BackgroundModel
+from surveil.blobs.background import BackgroundModel, learning_frames_after
 from surveil.blobs.extract import extract_blobs
 from surveil.blobs.settings import BackgroundConfig, BlobConfig
 from surveil.blobs.skin import SkinModel, default_skin_model
@@ -115,6 +115,7 @@ class Pipeline:
         self.carry = CarryAnalyser(cfg.carry, rig)
         self.activity = ActivityEngine(rules)
         self._n_heads = 0
+        self._n_framesets = 0  # frame sets stepped since the start (or reset)
 
     @classmethod
     def for_recording(cls, recording: Recording, cfg: PipelineConfig, rules: RuleSet) -> Pipeline:
@@ -131,6 +132,7 @@ class Pipeline:
         self.carry.reset()
         self.activity.reset()
         self._n_heads = 0
+        self._n_framesets = 0
 
     def _observe(self, fs: FrameSet, timings: dict[str, float]) -> dict[str, CameraObservation]:
         observations = {}
@@ -140,7 +142,11 @@ class Pipeline:
                 continue
             bg = self.backgrounds.get(cam)
             if bg is None:
-                bg = self.backgrounds[cam] = BackgroundModel(self.cfg.background, img.shape[:2])
+                bg = self.backgrounds[cam] = BackgroundModel(
+                    self.cfg.background,
+                    img.shape[:2],
+                    learning_frames_after(self.cfg.background, self._n_framesets),
+                )
             t0 = time.perf_counter()
             silhouettes = bg.step(img)
             t1 = time.perf_counter()
@@ -159,6 +165,7 @@ class Pipeline:
         """Process one frame set through every stage."""
         timings = dict.fromkeys(("background", "skin", "blobs"), 0.0)
         observations = self._observe(fs, timings)
+        self._n_framesets += 1
         learning = any(bg.learning for bg in self.backgrounds.values())
         t0 = time.perf_counter()
         candidates = make_candidates(

@@ -70,6 +70,25 @@ def silhouettes_from_mask(foreground: np.ndarray, min_area_px: int) -> Silhouett
     return Silhouettes(labels, top, bottom, dist)
 
 
+def learning_frames_after(cfg: BackgroundConfig, framesets_before: int) -> int:
+    """Length of the learning phase of a camera whose first frame comes ``framesets_before``
+    frame sets into a run: what is left of the run's learning phase, at least
+    ``cfg.late_learning_frames``.
+
+    The learning phase assumes the room is empty at the start of a run. A camera that starts
+    late must not learn longer than the others: the people who walk in when the run's
+    learning phase ends would be learnt into its background (at the learning rate 1/n, a
+    person standing for 15 frames of a 30-frame learning phase becomes background).
+
+    >>> cfg = BackgroundConfig(learning_frames=30, late_learning_frames=5)
+    >>> [learning_frames_after(cfg, n) for n in (0, 15, 40)]
+    [30, 15, 5]
+    """
+    return max(
+        cfg.learning_frames - framesets_before, min(cfg.late_learning_frames, cfg.learning_frames)
+    )
+
+
 class BackgroundModel:
     """Stateful MOG2 background model of one camera.
 
@@ -77,17 +96,22 @@ class BackgroundModel:
     ----------
     cfg : BackgroundConfig
     shape : (H, W) of the frames this camera delivers.
+    learning_frames : length of the learning phase (default ``cfg.learning_frames``; a camera
+        that starts late: :func:`learning_frames_after`)
 
-    The first ``cfg.learning_frames`` frames are learnt at ``cfg.learning_rate_initial``
+    The first ``learning_frames`` frames are learnt at ``cfg.learning_rate_initial``
     (default -1: MOG2's automatic 1/n, i.e. a running mean of everything seen so far), later
     frames at the slow ``cfg.learning_rate`` so that people who stand still are not absorbed.
     Silhouettes are still returned during the learning phase.
     """
 
-    def __init__(self, cfg: BackgroundConfig, shape: tuple[int, int]) -> None:
+    def __init__(
+        self, cfg: BackgroundConfig, shape: tuple[int, int], learning_frames: int | None = None
+    ) -> None:
         if len(shape) != 2 or min(shape) <= 0:
             raise ValueError(f"shape must be (H, W) with positive sizes, got {shape}")
         self.cfg = cfg
+        self.learning_frames = cfg.learning_frames if learning_frames is None else learning_frames
         self.shape = (int(shape[0]), int(shape[1]))
         scale = cfg.model_scale
         self._small_size = None
@@ -114,7 +138,7 @@ class BackgroundModel:
     @property
     def learning(self) -> bool:
         """True while in the initial learning phase."""
-        return self.n_frames < self.cfg.learning_frames
+        return self.n_frames < self.learning_frames
 
     def step(self, bgr: np.ndarray) -> Silhouettes:
         """Update the model with one frame and return its person silhouettes.

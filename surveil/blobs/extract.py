@@ -14,6 +14,8 @@ from surveil.blobs.skin import SkinModel
 from surveil.datatypes import BlobSet, CameraObservation, Silhouettes
 from surveil.validate import require_shape
 
+REFERENCE_WIDTH_PX = 640  # frame width the pixel sizes of BlobConfig.open_px are given for
+
 
 def _empty_blobs(shape: tuple[int, int]) -> BlobSet:
     return BlobSet(
@@ -24,6 +26,22 @@ def _empty_blobs(shape: tuple[int, int]) -> BlobSet:
         np.zeros(0),
         np.zeros(shape, np.int32),
     )
+
+
+def _open(mask: np.ndarray, diameter_px: int) -> np.ndarray:
+    """Morphological opening of a bool mask with an elliptical kernel, outside the frame
+    counting as empty (computed on the mask's bounding box: the opening of empty space is
+    empty)."""
+    x, y, w, h = cv2.boundingRect(mask.view(np.uint8))
+    out = np.zeros_like(mask)
+    if w and h:
+        kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (diameter_px, diameter_px))
+        crop = np.ascontiguousarray(mask[y : y + h, x : x + w]).view(np.uint8)
+        opened = cv2.morphologyEx(
+            crop, cv2.MORPH_OPEN, kernel, borderType=cv2.BORDER_CONSTANT, borderValue=0
+        )
+        out[y : y + h, x : x + w] = opened > 0
+    return out
 
 
 def extract_blobs(
@@ -64,26 +82,22 @@ def extract_blobs(
         # grey dilation grows every label (overlaps go to the larger label)
         sil = cv2.dilate(sil.astype(np.uint16), kernel).astype(np.int32)
     inside = skin & (sil > 0)
+    # the kernel is given for 640-pixel-wide frames: limbs shrink with the frame, and at
+    # 320x240 (hands ~6 px) a 3-px opening would erase them
+    radius_px = round((cfg.open_px - 1) / 2 * shape[1] / REFERENCE_WIDTH_PX)
+    if radius_px > 0:
+        inside = _open(inside, 2 * radius_px + 1)
     n_all, labels, stats, centroids = components_with_stats(inside)
     areas = stats[1:, cv2.CC_STAT_AREA].astype(np.int64)
     ok = np.flatnonzero(areas >= max(cfg.min_blob_area_px, 1))
     if cfg.max_blob_area_rel > 0 and len(ok) and silhouettes.n:
         # a head covers ~1 % of (silhouette height)^2; much larger skin-coloured regions are
         # clothing (beige shirts, khaki trousers) that would crowd the real limbs out of the
-        # n_keep largest
-        c = np.rint(centroids[ok + 1]).astype(np.int64)
-        c[:, 0] = np.clip(c[:, 0], 0, shape[1] - 1)
-        c[:, 1] = np.clip(c[:, 1], 0, shape[0] - 1)
-        s_at = sil[c[:, 1], c[:, 0]]
-        heights = np.zeros(len(ok))
-        on = s_at > 0
-        heights[on] = (
-            np.asarray(silhouettes.bottom_v_px)[s_at[on] - 1]
-            - np.asarray(silhouettes.top_v_px)[s_at[on] - 1]
-            + 1.0
-        )
-        too_big = on & (areas[ok] > cfg.max_blob_area_rel * heights**2)
-        ok = ok[~too_big]
+        # n_keep largest. The reference is the tallest silhouette in the frame, not the
+        # blob's own: a person whose clothes match the background falls apart into short
+        # pieces, and their head would be "too big" for the piece it sits on
+        tallest = float(np.max(silhouettes.bottom_v_px - silhouettes.top_v_px)) + 1.0
+        ok = ok[areas[ok] <= cfg.max_blob_area_rel * tallest**2]
     n_h = max(n_people_hint if n_people_hint is not None else silhouettes.n, 1)
     n_keep = math.ceil(cfg.blob_excess * 3 * n_h)
     order = ok[np.argsort(-areas[ok], kind="stable")][:n_keep]  # 0-based blob index

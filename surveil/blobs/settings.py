@@ -17,7 +17,13 @@ class BackgroundConfig:
 
     history_frames: int = setting(300, "MOG2 history length, frames", min=1)
     var_threshold: float = setting(16.0, "MOG2 squared Mahalanobis threshold", min=0.0)
-    learning_frames: int = setting(30, "frames of the initial learning phase", min=0)
+    learning_frames: int = setting(30, "frame sets of the run's initial learning phase", min=0)
+    late_learning_frames: int = setting(
+        5,
+        "shortest learning phase of a camera that starts after the run's learning phase "
+        "(it learns what it sees first, people included)",
+        min=1,
+    )
     learning_rate_initial: float = setting(
         -1.0, "MOG2 rate during learning (-1 = automatic 1/n)", min=-1.0, max=1.0
     )
@@ -73,7 +79,7 @@ class SkinConfig:
 class BlobConfig:
     """Skin blobs inside silhouettes (section 6.2)."""
 
-    min_blob_area_px: int = setting(20, "smallest blob kept, px", min=0)
+    min_blob_area_px: int = setting(16, "smallest blob kept, px", min=0)
     max_blob_area_rel: float = setting(
         0.03,
         "drop blobs larger than this times the square of their silhouette's height (a head "
@@ -82,3 +88,10 @@ class BlobConfig:
     )
     blob_excess: float = setting(1.5, "lambda: keep ceil(lambda * 3 * N_h) largest", min=1.0)
     silhouette_dilate_px: int = setting(3, "grow silhouettes by this radius, px", min=0)
+    open_px: int = setting(
+        3,
+        "opening of the skin-inside-silhouette mask, elliptical kernel diameter in px of a "
+        "640-pixel-wide frame, scaled with the width (0 = none): cuts the one- or two-pixel "
+        "rims of colour fringes along silhouette edges that join heads and hands into one blob",
+        min=0,
+    )

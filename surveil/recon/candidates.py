@@ -38,7 +38,7 @@ def _gauss(x: np.ndarray, sigma: float) -> np.ndarray:
     return np.where(np.isfinite(x), g, 0.0)
 
 
-def _silhouette_prior(
+def silhouette_prior(
     points_m: np.ndarray,
     rig: Rig,
     by_cam: dict[int, CameraObservation],
@@ -324,9 +324,7 @@ def make_candidates(
         return _empty()
     ia, ib, points, half_gap = ia[keep], ib[keep], points[keep], half_gap[keep]
     # eq. 27 (silhouette consistency) on the survivors only
-    p_b = _silhouette_prior(
-        points, rig, by_cam, cfg.sigma_silhouette_px, cfg.silhouette_drop_worst
-    )
+    p_b = silhouette_prior(points, rig, by_cam, cfg.sigma_silhouette_px, cfg.silhouette_drop_worst)
     prior = p_o[keep] * p_t[keep] * p_b  # eq. 19
     ok = (p_b >= cfg.term_threshold) & (prior >= cfg.prior_threshold)
     ia, ib, points, half_gap, prior = ia[ok], ib[ok], points[ok], half_gap[ok], prior[ok]

@@ -2,6 +2,7 @@ import numpy as np
 import pytest
 
 from surveil.blobs import BackgroundConfig, BackgroundModel
+from surveil.blobs.background import learning_frames_after
 
 H, W = 120, 160
 
@@ -68,6 +69,23 @@ def test_learning_phase_then_slow_rate_keeps_a_standing_person(rng):
     assert sil.n == 1
     model.reset()
     assert model.learning and model.n_frames == 0
+
+
+def test_a_camera_starting_late_learns_only_what_is_left_of_the_learning_phase(rng):
+    # the run learns for 30 frame sets; a camera whose first frame comes 15 sets late learns
+    # for the remaining 15 (people walk in when the run's learning ends), one that comes
+    # after the end for the shortest phase
+    cfg = BackgroundConfig(learning_frames=30, late_learning_frames=4)
+    _, frame = _scene(rng)
+    late = BackgroundModel(cfg, (H, W), learning_frames_after(cfg, 15))
+    _learn(late, frame, 14)
+    assert late.learning
+    late.step(frame())
+    assert not late.learning
+    very_late = BackgroundModel(cfg, (H, W), learning_frames_after(cfg, 100))
+    _learn(very_late, frame, 4)
+    assert not very_late.learning
+    assert BackgroundModel(cfg, (H, W)).learning_frames == 30
 
 
 def test_wrong_frame_shape_names_argument():

@@ -1,9 +1,11 @@
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 
 from surveil.blobs import BlobConfig, extract_blobs, silhouettes_from_mask
+from surveil.blobs.extract import REFERENCE_WIDTH_PX
 
 H, W = 100, 120
 
@@ -20,13 +22,42 @@ def test_keeps_ceil_lambda_3n_largest_and_drops_small():
     sizes = [9, 8, 7, 6, 5, 4, 2]  # squares: areas 81..4 px
     for i, s in enumerate(sizes):
         skin[12 + 11 * i : 12 + 11 * i + s, 25 : 25 + s] = True
-    cfg = BlobConfig(min_blob_area_px=10, blob_excess=1.5, silhouette_dilate_px=0)
+    cfg = BlobConfig(min_blob_area_px=10, blob_excess=1.5, silhouette_dilate_px=0, open_px=0)
     blobs = extract_blobs(skin, sil, cfg)
     assert len(blobs) == math.ceil(1.5 * 3 * 1) == 5
     assert blobs.areas_px.tolist() == [81, 64, 49, 36, 25]
     blobs = extract_blobs(skin, sil, cfg, n_people_hint=2)  # ceil(9) = 9: only the size cut
     assert blobs.areas_px.tolist() == [81, 64, 49, 36, 25, 16]
     assert blobs.labels.max() == 6 and (blobs.labels == 1).sum() == 81
+
+
+def test_opening_cuts_thin_rims_joining_blobs_and_keeps_small_hands():
+    # a head and a hand joined by a two-pixel rim of colour fringe along the silhouette edge,
+    # in a 640-pixel-wide frame (the opening's kernel size is given for that width)
+    h, w = 100, REFERENCE_WIDTH_PX
+    person = np.zeros((h, w), bool)
+    person[10:91, 20:80] = True
+    sil = silhouettes_from_mask(person, 10)
+    skin = np.zeros((h, w), bool)
+    skin[15:27, 40:52] = True  # head
+    skin[60:64, 60:64] = True  # a small hand, 4 x 4
+    skin[20:70, 21:23] = True  # the rim, two pixels wide
+    skin[20:22, 21:41] = True
+    skin[68:70, 21:61] = True
+    skin[62:69, 60:62] = True
+    cfg = BlobConfig(min_blob_area_px=10, silhouette_dilate_px=0, max_blob_area_rel=0.0)
+    plain = dataclasses.replace(cfg, open_px=0)
+    assert len(extract_blobs(skin, sil, plain)) == 1  # head, rim and hand in one blob
+    blobs = extract_blobs(skin, sil, cfg)
+    assert len(blobs) == 2
+    assert blobs.centroids_px.ravel().tolist() == pytest.approx([45.5, 20.5, 61.5, 61.5], abs=0.3)
+    # at half the width the kernel would be 1.5 px: no opening (a 2 x 2 hand survives)
+    half = extract_blobs(
+        skin[::2, ::2],
+        silhouettes_from_mask(person[::2, ::2], 10),
+        dataclasses.replace(cfg, min_blob_area_px=1),
+    )
+    assert len(half) == 1
 
 
 def test_ignores_skin_outside_silhouettes_and_computes_rel_v():

@@ -1,0 +1,227 @@
+"""Why true limbs go without a 3-D candidate: every miss of the candidate benchmark, by cause.
+
+    python benchmarks/candidate_misses.py [--out out/bench_synth] [--max-frames N] [NAME ...]
+
+For every true head or hand seen by >= 2 cameras (ground truth) with no candidate within
+100 mm (the miss of ``candidates_bench.py``), the first stage that lost it:
+
+- ``no skin``: fewer than two of the cameras that see the limb have skin pixels within
+  ``R`` px of its projection (the skin classifier missed it);
+- ``no silhouette``: skin there, but outside every (dilated) silhouette in all but < 2 views;
+- ``no blob``: skin inside a silhouette, but no blob there (too small, or cut by the
+  ceil(lambda 3 N_h) largest);
+- ``blob merged``: a blob covers the projection but its centroid is more than ``R`` px away
+  (the limb's skin joined another limb's or a skin-coloured region's);
+- ``triangulation``: >= 2 views have the limb's own blob (centroid within ``R`` px), yet no
+  pair of them triangulates within 100 mm (calibration error, centroid bias);
+- ``prior p_o`` / ``prior p_t`` / ``prior p_b``: such a pair exists, but the prior rejects
+  it; named after the term furthest below its threshold (or ``prior product``);
+- ``merging``: the pair survives the prior but is absorbed by a candidate > 100 mm away;
+- ``explained away``: dropped as a ghost (docs/candidates.md).
+
+Blobs are extracted with the true number of people as N_h (the tracker's head count in a
+run); the recording's own (slightly wrong) calibration is used throughout, as in a run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+
+from surveil.blobs.background import BackgroundModel, learning_frames_after
+from surveil.blobs.extract import extract_blobs
+from surveil.blobs.skin import default_skin_model
+from surveil.datatypes import CameraObservation
+from surveil.io.ground_truth import load_ground_truth
+from surveil.io.recording import open_recording
+from surveil.pipeline import PipelineConfig, load_pipeline_config
+from surveil.recon.candidates import make_candidates, silhouette_prior
+from surveil.recon.settings import CandidateConfig
+from surveil.recon.triangulate import closest_points
+from surveil.synth.scene import synthesise
+
+ROOT = Path(__file__).resolve().parents[1]
+CAUSES = (
+    "no skin",
+    "no silhouette",
+    "no blob",
+    "blob merged",
+    "triangulation",
+    "prior p_o",
+    "prior p_t",
+    "prior p_b",
+    "prior product",
+    "merging",
+    "explained away",
+)
+
+
+def _near(mask: np.ndarray, uv: np.ndarray, r: int) -> bool:
+    h, w = mask.shape
+    u, v = int(round(uv[0])), int(round(uv[1]))
+    if not (0 <= u < w and 0 <= v < h):
+        return False
+    return bool(mask[max(v - r, 0) : v + r + 1, max(u - r, 0) : u + r + 1].any())
+
+
+def classify_miss(
+    pos_m: np.ndarray,
+    cams_seeing: list[int],
+    obs_by_cam: dict[int, CameraObservation],
+    rig,
+    cfg: CandidateConfig,
+    without_explaining: np.ndarray,
+    radius_px: float,
+) -> str:
+    """The first stage that lost the true limb at ``pos_m`` (see the module docstring)."""
+    own: dict[int, int] = {}  # camera -> blob index of the limb's own blob
+    stage = Counter()
+    for m in cams_seeing:
+        obs = obs_by_cam.get(m)
+        if obs is None:
+            continue
+        uv = rig.cameras[m].project(pos_m[None])[0][0]
+        r = int(radius_px)
+        blobs = obs.blobs
+        if len(blobs):
+            d = np.linalg.norm(blobs.centroids_px - uv, axis=1)
+            if d.min() <= radius_px:
+                own[m] = int(d.argmin())
+                continue
+        if not _near(obs.skin, uv, r // 2):
+            stage["no skin"] += 1
+        elif not _near(obs.skin & (obs.silhouettes.labels > 0), uv, r // 2):
+            stage["no silhouette"] += 1
+        elif _near(blobs.labels > 0, uv, r // 2):
+            stage["blob merged"] += 1
+        else:
+            stage["no blob"] += 1
+    if len(own) < 2:
+        # the view losses that leave fewer than two: the most common one names the miss
+        return stage.most_common(1)[0][0] if stage else "no blob"
+    # every pair of own blobs: the points they triangulate and their prior terms
+    cams = sorted(own)
+    pairs = [(a, b) for i, a in enumerate(cams) for b in cams[i + 1 :]]
+    o1, d1, o2, d2, dv = [], [], [], [], []
+    for a, b in pairs:
+        oa, da = rig.cameras[a].backproject(obs_by_cam[a].blobs.centroids_px[[own[a]]])
+        ob, db = rig.cameras[b].backproject(obs_by_cam[b].blobs.centroids_px[[own[b]]])
+        o1.append(oa)
+        d1.append(da[0])
+        o2.append(ob)
+        d2.append(db[0])
+        dv.append(obs_by_cam[a].blobs.rel_v[own[a]] - obs_by_cam[b].blobs.rel_v[own[b]])
+    pts, gap = closest_points(np.array(o1), np.array(d1), np.array(o2), np.array(d2))
+    close = np.linalg.norm(pts - pos_m, axis=1) < 0.1
+    if not close.any():
+        return "triangulation"
+    p_o = np.exp(-0.5 * (np.array(dv) / cfg.sigma_rel_v) ** 2)
+    p_t = np.exp(-0.5 * (gap / cfg.sigma_gap_m) ** 2)
+    p_b = silhouette_prior(
+        pts, rig, obs_by_cam, cfg.sigma_silhouette_px, cfg.silhouette_drop_worst
+    )
+    prior = p_o * p_t * p_b
+    ok = (
+        close
+        & (gap <= cfg.max_gap_m)
+        & (np.minimum(np.minimum(p_o, p_t), p_b) >= cfg.term_threshold)
+        & (prior >= cfg.prior_threshold)
+    )
+    if not ok.any():
+        k = int(np.flatnonzero(close)[np.argmax(prior[close])])
+        terms = {"prior p_o": p_o[k], "prior p_t": p_t[k], "prior p_b": p_b[k]}
+        if gap[k] > cfg.max_gap_m:
+            return "prior p_t"
+        worst = min(terms, key=terms.get)
+        return worst if terms[worst] < cfg.term_threshold else "prior product"
+    if len(without_explaining) and (
+        np.linalg.norm(without_explaining - pos_m, axis=1).min() < 0.1
+    ):
+        return "explained away"
+    return "merging"
+
+
+def misses_of(
+    rec_dir: Path, max_frames: int | None, radius_px: float, config: PipelineConfig
+) -> tuple[Counter, int, float]:
+    """Miss causes, the number of countable limb-frames, false candidates per frame set."""
+    rec = open_recording(rec_dir)
+    gt = load_ground_truth(rec_dir)
+    bg_cfg, blob_cfg, cfg = config.background, config.blobs, config.candidates
+    no_explaining = dataclasses.replace(cfg, explain_away=False)
+    skin_model = default_skin_model()
+    n_people = len({lab.split("/")[0] for lab in gt.labels})
+    cam_index = {c: rec.rig.names.index(c) for c in gt.cameras}
+    models: dict[str, BackgroundModel] = {}
+    causes: Counter = Counter()
+    countable = n_sets = false = 0
+    for fs in rec.framesets(stop=max_frames):
+        obs_by_cam: dict[int, CameraObservation] = {}
+        for cam in rec.camera_names:
+            img = fs.images.get(cam)
+            if img is None:
+                continue
+            if cam not in models:
+                models[cam] = BackgroundModel(
+                    bg_cfg, img.shape[:2], learning_frames_after(bg_cfg, fs.index)
+                )
+            sil = models[cam].step(img)
+            skin = skin_model.classify(img)
+            blobs = extract_blobs(skin, sil, blob_cfg, n_people)
+            obs_by_cam[rec.rig.names.index(cam)] = CameraObservation(cam, sil, skin, blobs)
+        if fs.index < bg_cfg.learning_frames:
+            continue
+        observations = list(obs_by_cam.values())
+        cands = make_candidates(observations, rec.rig, cfg)
+        i = int(np.searchsorted(gt.frames, fs.index))
+        truth = gt.positions_m[i]
+        seen2 = np.isfinite(truth).all(axis=1) & (gt.n_views[i] >= 2)
+        countable += int(seen2.sum())
+        n_sets += 1
+        missed = seen2.copy()
+        if len(cands.points_m):
+            d = np.linalg.norm(cands.points_m[:, None] - truth[None], axis=2)
+            d = np.where(np.isfinite(d), d, np.inf)
+            missed &= ~(d.min(axis=0) < 0.1)
+            false += int((d.min(axis=1) > 0.1).sum())
+        if not missed.any():
+            continue
+        loose = make_candidates(observations, rec.rig, no_explaining).points_m
+        for j in np.flatnonzero(missed):
+            cams = [cam_index[c] for c, v in zip(gt.cameras, gt.visible[i, j], strict=True) if v]
+            causes[classify_miss(truth[j], cams, obs_by_cam, rec.rig, cfg, loose, radius_px)] += 1
+    return causes, countable, false / max(n_sets, 1)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("names", nargs="*")
+    parser.add_argument("--out", type=Path, default=ROOT / "out" / "bench_synth")
+    parser.add_argument("--max-frames", type=int, default=None)
+    parser.add_argument("--radius-px", type=float, default=10.0, help="R, px")
+    parser.add_argument("--config", type=Path, help="pipeline settings (TOML) to diagnose")
+    args = parser.parse_args(argv)
+    config = load_pipeline_config(args.config)
+    paths = [ROOT / "recordings" / f"{n}.toml" for n in args.names] or sorted(
+        (ROOT / "recordings").glob("*.toml")
+    )
+    print("Fractions of the true limb-frames seen by >= 2 cameras, lost at each stage:\n")
+    print("| scenario | limb-frames | false / set | missed | " + " | ".join(CAUSES) + " |")
+    print("|---|---|---|---|" + "---|" * len(CAUSES))
+    for path in paths:
+        rec_dir = args.out / path.stem
+        synthesise(path, rec_dir)
+        causes, n, false = misses_of(rec_dir, args.max_frames, args.radius_px, config)
+        cells = " | ".join(f"{causes[c] / max(n, 1):.3f}" for c in CAUSES)
+        missed = sum(causes.values()) / max(n, 1)
+        print(f"| {path.stem} | {n} | {false:.2f} | {missed:.3f} | {cells} |", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
