@@ -1,6 +1,7 @@
 """End-to-end benchmark: `surveil run` + `surveil eval` on every bundled scenario (issues 4, 5).
 
-    python benchmarks/pipeline_bench.py [--out out/bench_synth] [--seed 0] [NAME ...]
+    python benchmarks/pipeline_bench.py [--out out/bench_synth] [--seed 0] [--config TOML]
+        [NAME ...]
 
 Renders (or reuses) each scenario, runs the whole pipeline with default settings and rules on
 the recording's own (deliberately slightly wrong) calibration, scores the output MCAP against
@@ -11,6 +12,7 @@ processing rate (frame sets per second, wall clock, one process).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 from pathlib import Path
 
@@ -18,7 +20,7 @@ from surveil.activity import load_rules
 from surveil.eval.score import EvalConfig, evaluate
 from surveil.io.mcap_writer import McapSink, McapWriter
 from surveil.io.recording import open_recording
-from surveil.pipeline import Pipeline, PipelineConfig, run_recording
+from surveil.pipeline import Pipeline, load_pipeline_config, run_recording
 from surveil.synth.scene import synthesise
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -28,12 +30,20 @@ def _f(x, digits=3):
     return "-" if x is None else f"{x:.{digits}f}"
 
 
-def bench(name: str, out_dir: Path, seed: int) -> tuple[object, object, float]:
+def output_path(out_dir: Path, name: str, config: Path | None) -> Path:
+    """Where a run of ``name`` goes: ``<name>.mcap``, or ``<name>.<config stem>.mcap``."""
+    return out_dir / (f"{name}.{config.stem}.mcap" if config else f"{name}.mcap")
+
+
+def bench(
+    name: str, out_dir: Path, seed: int, config: Path | None = None
+) -> tuple[object, object, float]:
     rec_dir = out_dir / name
     synthesise(ROOT / "recordings" / f"{name}.toml", rec_dir)
     rec = open_recording(rec_dir)
-    mcap = out_dir / f"{name}.mcap"
-    pipeline = Pipeline.for_recording(rec, PipelineConfig(seed=seed), load_rules())
+    mcap = output_path(out_dir, name, config)
+    cfg = dataclasses.replace(load_pipeline_config(config), seed=seed)
+    pipeline = Pipeline.for_recording(rec, cfg, load_rules())
     sink = McapSink(McapWriter(mcap, rec.rig, start_time_ns=rec.start_time_ns))
     summary = run_recording(rec.framesets, rec.n_framesets, pipeline, [sink])
     report = evaluate(rec_dir, mcap, EvalConfig())
@@ -45,11 +55,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("names", nargs="*")
     parser.add_argument("--out", type=Path, default=ROOT / "out" / "bench_synth")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--config", type=Path, help="pipeline settings (TOML); output <name>.<stem>.mcap"
+    )
     args = parser.parse_args(argv)
     names = args.names or sorted(p.stem for p in (ROOT / "recordings").glob("*.toml"))
     track_rows, event_rows = [], []
     for name in names:
-        report, summary, rate = bench(name, args.out, args.seed)
+        report, summary, rate = bench(name, args.out, args.seed, args.config)
         t, e = report.targets, report.events
         stages = summary.median_ms()
         track_rows.append(

@@ -508,7 +508,14 @@ class ActivityEngine:
                 from_actor=labels[0] if moved_ab else labels[1] if moved_ba else None,
                 to_actor=labels[1] if moved_ab else labels[0] if moved_ba else None,
             )
-        log.debug("%s: %s did not match", rule.rule_id, "+".join(ep.labels))
+        if log.isEnabledFor(logging.DEBUG):
+            log.debug(
+                "%s: %s did not match (carry before %s, after %s)",
+                rule.rule_id,
+                "+".join(ep.labels),
+                [_describe(e, th.min_confidence) for e in ep.before],
+                [_describe(e, th.min_confidence) for e in after],
+            )
         return None
 
     # -----------------------------------------------------------------------------------------
@@ -666,6 +673,16 @@ def _confidence(used: list[CarryEstimate | None], timed_out: bool, factor: float
     conf = float(np.mean(confs)) if confs else 1.0
     conf = min(max(conf, 0.0), 1.0)
     return conf * factor if timed_out else conf
+
+
+def _describe(est: CarryEstimate | None, min_confidence: float) -> str:
+    """A carry estimate for the debug log: ``1 (0.82, 120 deg)``, ``0 (0.64)``, ``? (0.12)``."""
+    if est is None:
+        return "none"
+    state = carry_state(est, min_confidence)
+    mark = "?" if state is None else str(int(state))
+    hue = f", {est.hue_deg:.0f} deg" if est.hue_deg is not None else ""
+    return f"{mark} ({est.confidence:.2f}{hue})"
 
 
 def _first_hue(estimates: list[CarryEstimate], min_confidence: float) -> float | None:

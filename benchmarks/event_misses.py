@@ -1,0 +1,127 @@
+"""What happened to every true activity event in a run: recognised, or where it was lost.
+
+    python benchmarks/event_misses.py [--out out/bench_synth] [--seed 0] [--rerun] [--config TOML]
+        [NAME ...]
+
+Reads ``out/bench_synth/<name>[.<config stem>].mcap`` (written by
+``benchmarks/pipeline_bench.py``; run here when missing or with ``--rerun``) and the ground
+truth. For every true event, the trackers nearest to its true actors (hands, or a hand and a
+head) are followed from 0.7 s before to 0.5 s after the climax; trackers are matched by
+position (within ``--gate-m``), not by label, so a wrong label does not hide a good track.
+Verdicts:
+
+- ``recognised``: an output event of the same activity within 1 s of the climax;
+- ``other event``: an output event of another activity within 1 s (named);
+- ``combined``: (pair events) the actors' trackers were combined within 0.3 s of the
+  climax, but no event followed (labels, carry states or rule thresholds);
+- ``actor lost``: an actor had no tracker near it in more than 40 % of the window;
+- ``one tracker``: (pair events) one tracker was nearest to both actors near the climax,
+  never in the combined state: the other's tracker was lost or had drifted onto it;
+- ``not combined``: both actors tracked, never combined;
+- ``tracked``: (one-hand events) the hand was tracked, no event followed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+
+from surveil.datatypes import ActivityEvent, Phase
+from surveil.io.ground_truth import GroundTruth, load_ground_truth
+from surveil.io.mcap_reader import RunData, read_run
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from pipeline_bench import bench, output_path  # noqa: E402
+
+BEFORE_S, AFTER_S, CLIMAX_S, MATCH_S = 0.7, 0.5, 0.3, 1.0
+
+
+def _actor_tracks(
+    run: RunData, gt: GroundTruth, actor: str, frames: np.ndarray, gate_m: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per output frame: the tracker nearest to the true actor within ``gate_m`` (-1: none)
+    and its state code."""
+    j = gt.labels.index(actor)
+    trackers = np.full(len(frames), -1)
+    states = np.full(len(frames), 255)
+    for k, f in enumerate(frames):
+        g = int(np.argmin(np.abs(gt.t_ns - run.frame_t_ns[f])))
+        truth = gt.positions_m[g, j]
+        rows = np.flatnonzero((run.target_frame == f) & (run.target_state != Phase.LOST.code))
+        if not np.isfinite(truth).all() or len(rows) == 0:
+            continue
+        d = np.linalg.norm(run.target_pos_m[rows] - truth, axis=1)
+        if d.min() <= gate_m:
+            r = rows[int(d.argmin())]
+            trackers[k] = run.target_tracker[r]
+            states[k] = run.target_state[r]
+    return trackers, states
+
+
+def verdict(event: ActivityEvent, run: RunData, gt: GroundTruth, gate_m: float) -> tuple[str, str]:
+    """(verdict, detail) of one true event (see the module docstring)."""
+    climax = event.climax_ns  # the run's times and the ground truth's share one clock
+    near = [e for e in run.events if abs(e.climax_ns - climax) <= MATCH_S * 1e9]
+    if any(e.activity == event.activity for e in near):
+        return "recognised", ""
+    if near:
+        return "other event", ", ".join(sorted({e.activity for e in near}))
+    frames = np.flatnonzero(
+        (run.frame_t_ns >= climax - BEFORE_S * 1e9) & (run.frame_t_ns <= climax + AFTER_S * 1e9)
+    )
+    hands = [a for a in event.actors if a in gt.labels]
+    tracks = [_actor_tracks(run, gt, a, frames, gate_m) for a in hands]
+    tracked = [float(np.mean(t >= 0)) for t, _ in tracks]
+    detail = ", ".join(f"{a} {f:.0%}" for a, f in zip(hands, tracked, strict=True))
+    if min(tracked, default=0.0) < 0.6:
+        return "actor lost", detail
+    if len(tracks) < 2:
+        return "tracked", detail
+    at_climax = np.abs(run.frame_t_ns[frames] - climax) <= CLIMAX_S * 1e9
+    (ta, sa), (tb, sb) = tracks[:2]
+    both = (sa == Phase.COMBINED.code) & (sb == Phase.COMBINED.code)
+    if (at_climax & (ta >= 0) & both).any():
+        return "combined", detail
+    if (at_climax & (ta >= 0) & (ta == tb)).any():
+        return "one tracker", detail
+    return "not combined", detail
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("names", nargs="*")
+    parser.add_argument("--out", type=Path, default=ROOT / "out" / "bench_synth")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--rerun", action="store_true", help="run the pipeline again")
+    parser.add_argument("--config", type=Path, help="pipeline settings (TOML) of the run")
+    parser.add_argument("--gate-m", type=float, default=0.15, help="tracker-actor gate, m")
+    args = parser.parse_args(argv)
+    names = args.names or sorted(p.stem for p in (ROOT / "recordings").glob("*.toml"))
+    totals: Counter = Counter()
+    print("| scenario | activity | climax s | actors | verdict | detail |")
+    print("|---|---|---|---|---|---|")
+    for name in names:
+        mcap = output_path(args.out, name, args.config)
+        if args.rerun or not mcap.exists():
+            bench(name, args.out, args.seed, args.config)
+        run = read_run(mcap)
+        gt = load_ground_truth(args.out / name)
+        for event in gt.events:
+            v, detail = verdict(event, run, gt, args.gate_m)
+            totals[v] += 1
+            climax_s = event.climax_ns / 1e9
+            print(
+                f"| {name} | {event.activity} | {climax_s:.2f} | {', '.join(event.actors)} "
+                f"| {v} | {detail} |"
+            )
+    print("\n" + ", ".join(f"{k}: {n}" for k, n in totals.most_common()))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
