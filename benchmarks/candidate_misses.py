@@ -32,10 +32,8 @@ from collections import Counter
 from pathlib import Path
 
 import numpy as np
+from front_end import observe_recording
 
-from surveil.blobs.background import BackgroundModel, learning_frames_after
-from surveil.blobs.extract import extract_blobs
-from surveil.blobs.skin import default_skin_model
 from surveil.datatypes import CameraObservation
 from surveil.io.ground_truth import load_ground_truth
 from surveil.io.recording import open_recording
@@ -152,28 +150,14 @@ def misses_of(
     """Miss causes, the number of countable limb-frames, false candidates per frame set."""
     rec = open_recording(rec_dir)
     gt = load_ground_truth(rec_dir)
-    bg_cfg, blob_cfg, cfg = config.background, config.blobs, config.candidates
+    bg_cfg, cfg = config.background, config.candidates
     no_explaining = dataclasses.replace(cfg, explain_away=False)
-    skin_model = default_skin_model()
     n_people = len({lab.split("/")[0] for lab in gt.labels})
     cam_index = {c: rec.rig.names.index(c) for c in gt.cameras}
-    models: dict[str, BackgroundModel] = {}
     causes: Counter = Counter()
     countable = n_sets = false = 0
-    for fs in rec.framesets(stop=max_frames):
-        obs_by_cam: dict[int, CameraObservation] = {}
-        for cam in rec.camera_names:
-            img = fs.images.get(cam)
-            if img is None:
-                continue
-            if cam not in models:
-                models[cam] = BackgroundModel(
-                    bg_cfg, img.shape[:2], learning_frames_after(bg_cfg, fs.index)
-                )
-            sil = models[cam].step(img)
-            skin = skin_model.classify(img)
-            blobs = extract_blobs(skin, sil, blob_cfg, n_people)
-            obs_by_cam[rec.rig.names.index(cam)] = CameraObservation(cam, sil, skin, blobs)
+    for fs, by_name, _ in observe_recording(rec, config, n_people, max_frames):
+        obs_by_cam = {rec.rig.names.index(cam): obs for cam, obs in by_name.items()}
         if fs.index < bg_cfg.learning_frames:
             continue
         observations = list(obs_by_cam.values())

@@ -24,16 +24,12 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+from front_end import observe_recording
 
-from surveil.blobs.background import BackgroundModel, learning_frames_after
-from surveil.blobs.extract import extract_blobs
-from surveil.blobs.settings import BackgroundConfig, BlobConfig
-from surveil.blobs.skin import default_skin_model
-from surveil.datatypes import CameraObservation
 from surveil.io.ground_truth import MaskClass, load_ground_truth
 from surveil.io.recording import open_recording
+from surveil.pipeline import PipelineConfig
 from surveil.recon.candidates import make_candidates
-from surveil.recon.settings import CandidateConfig
 from surveil.synth.scene import synthesise
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -42,38 +38,21 @@ ROOT = Path(__file__).resolve().parents[1]
 def bench_recording(rec_dir: Path, max_frames: int | None) -> dict:
     rec = open_recording(rec_dir)
     gt = load_ground_truth(rec_dir)
-    bg_cfg, blob_cfg, cand_cfg = BackgroundConfig(), BlobConfig(), CandidateConfig()
-    skin_model = default_skin_model()
-    models = {}
+    cfg = PipelineConfig()
+    bg_cfg, cand_cfg = cfg.background, cfg.candidates
     times: dict[str, list[float]] = {"background": [], "skin": [], "blobs": [], "candidates": []}
     found50 = found100 = countable = false = n_sets = 0
     dists: list[float] = []
     tp = fp = fn = 0
-    for fs in rec.framesets(stop=max_frames):
-        observations = []
-        for cam in rec.camera_names:
-            img = fs.images.get(cam)
-            if img is None:
-                continue
-            if cam not in models:
-                models[cam] = BackgroundModel(
-                    bg_cfg, img.shape[:2], learning_frames_after(bg_cfg, fs.index)
-                )
-            t0 = time.perf_counter()
-            sil = models[cam].step(img)
-            t1 = time.perf_counter()
-            skin = skin_model.classify(img)
-            t2 = time.perf_counter()
-            blobs = extract_blobs(skin, sil, blob_cfg)
-            t3 = time.perf_counter()
-            times["background"].append(t1 - t0)
-            times["skin"].append(t2 - t1)
-            times["blobs"].append(t3 - t2)
-            observations.append(CameraObservation(cam, sil, skin, blobs))
+    for fs, by_cam, cam_times in observe_recording(rec, cfg, max_frames=max_frames):
+        for stage, seconds in cam_times.items():
+            times[stage] += seconds
+        observations = list(by_cam.values())
+        for cam, obs in by_cam.items():
             mask_path = rec_dir / "ground_truth" / "masks" / cam / f"{fs.index:06d}.png"
             if fs.index >= bg_cfg.learning_frames and mask_path.exists():
                 truth = cv2.imread(str(mask_path))[..., 0] == MaskClass.SKIN
-                pred = skin & sil.mask
+                pred = obs.skin & obs.silhouettes.mask
                 tp += int(np.count_nonzero(pred & truth))
                 fp += int(np.count_nonzero(pred & ~truth))
                 fn += int(np.count_nonzero(~pred & truth))

@@ -1,0 +1,53 @@
+"""The per-camera stage of a run (background, skin, blobs) as the benchmarks replay it."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+
+from surveil.blobs.background import BackgroundModel, learning_frames_after
+from surveil.blobs.extract import extract_blobs
+from surveil.blobs.skin import default_skin_model
+from surveil.datatypes import CameraObservation, FrameSet
+from surveil.io.recording import Recording
+from surveil.pipeline import PipelineConfig
+
+
+def observe_recording(
+    rec: Recording,
+    cfg: PipelineConfig,
+    n_people: int | None = None,
+    max_frames: int | None = None,
+) -> Iterator[tuple[FrameSet, dict[str, CameraObservation], dict[str, list[float]]]]:
+    """Per frame set: the frames, every camera's observation (by camera name) and the seconds
+    each camera spent in ``background``, ``skin`` and ``blobs``.
+
+    Background models start on the run's clock as in ``surveil run``
+    (:func:`learning_frames_after`); blobs are chosen for ``n_people`` (default: the number
+    of silhouettes, where a run uses its tracked heads); the default skin model is used.
+    """
+    skin_model = default_skin_model()
+    models: dict[str, BackgroundModel] = {}
+    for fs in rec.framesets(stop=max_frames):
+        observations: dict[str, CameraObservation] = {}
+        times: dict[str, list[float]] = {"background": [], "skin": [], "blobs": []}
+        for cam in rec.camera_names:
+            img = fs.images.get(cam)
+            if img is None:
+                continue
+            if cam not in models:
+                models[cam] = BackgroundModel(
+                    cfg.background, img.shape[:2], learning_frames_after(cfg.background, fs.index)
+                )
+            t0 = time.perf_counter()
+            sil = models[cam].step(img)
+            t1 = time.perf_counter()
+            skin = skin_model.classify(img)
+            t2 = time.perf_counter()
+            blobs = extract_blobs(skin, sil, cfg.blobs, n_people)
+            t3 = time.perf_counter()
+            times["background"].append(t1 - t0)
+            times["skin"].append(t2 - t1)
+            times["blobs"].append(t3 - t2)
+            observations[cam] = CameraObservation(cam, sil, skin, blobs)
+        yield fs, observations, times
