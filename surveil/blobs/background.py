@@ -76,9 +76,10 @@ def learning_frames_after(cfg: BackgroundConfig, framesets_before: int) -> int:
     ``cfg.late_learning_frames``.
 
     The learning phase assumes the room is empty at the start of a run. A camera that starts
-    late must not learn longer than the others: the people who walk in when the run's
-    learning phase ends would be learnt into its background (at the learning rate 1/n, a
-    person standing for 15 frames of a 30-frame learning phase becomes background).
+    late must not learn longer than the others: it would learn, at the fast rate, the people
+    who walk in when the run's learning phase ends (in the three_people scene the late
+    camera's silhouettes shrank at their edges, and the silhouette prior, a product over
+    cameras, then vetoed most candidates; docs/blobs.md).
 
     >>> cfg = BackgroundConfig(learning_frames=30, late_learning_frames=5)
     >>> [learning_frames_after(cfg, n) for n in (0, 15, 40)]

@@ -82,8 +82,8 @@ class BlobConfig:
     min_blob_area_px: int = setting(16, "smallest blob kept, px", min=0)
     max_blob_area_rel: float = setting(
         0.03,
-        "drop blobs larger than this times the square of their silhouette's height (a head "
-        "is ~0.01): skin-coloured clothing, not a head or hand (0 = keep all)",
+        "drop blobs larger than this times the square of the tallest silhouette's height in "
+        "the frame (a head is ~0.01): skin-coloured clothing, not a head or hand (0 = keep all)",
         min=0.0,
     )
     blob_excess: float = setting(1.5, "lambda: keep ceil(lambda * 3 * N_h) largest", min=1.0)
@@ -91,7 +91,8 @@ class BlobConfig:
     open_px: int = setting(
         3,
         "opening of the skin-inside-silhouette mask, elliptical kernel diameter in px of a "
-        "640-pixel-wide frame, scaled with the width (0 = none): cuts the one- or two-pixel "
-        "rims of colour fringes along silhouette edges that join heads and hands into one blob",
+        "640-pixel-wide frame; its radius scales with the width (none at 320 px) (0 = none): "
+        "cuts the one- or two-pixel rims of colour fringes along silhouette edges that join "
+        "heads and hands into one blob",
         min=0,
     )
