@@ -38,7 +38,7 @@ from surveil.datatypes import CameraObservation
 from surveil.io.ground_truth import load_ground_truth
 from surveil.io.recording import open_recording
 from surveil.pipeline import PipelineConfig, load_pipeline_config
-from surveil.recon.candidates import make_candidates, silhouette_prior
+from surveil.recon.candidates import gauss_term, make_candidates, silhouette_prior
 from surveil.recon.settings import CandidateConfig
 from surveil.recon.triangulate import closest_points
 from surveil.synth.scene import synthesise
@@ -118,8 +118,8 @@ def classify_miss(
     close = np.linalg.norm(pts - pos_m, axis=1) < 0.1
     if not close.any():
         return "triangulation"
-    p_o = np.exp(-0.5 * (np.array(dv) / cfg.sigma_rel_v) ** 2)
-    p_t = np.exp(-0.5 * (gap / cfg.sigma_gap_m) ** 2)
+    p_o = gauss_term(np.array(dv), cfg.sigma_rel_v)
+    p_t = gauss_term(gap, cfg.sigma_gap_m)
     p_b = silhouette_prior(
         pts, rig, obs_by_cam, cfg.sigma_silhouette_px, cfg.silhouette_drop_worst
     )

@@ -52,7 +52,9 @@ def _actor_tracks(
     for k, f in enumerate(frames):
         g = int(np.argmin(np.abs(gt.t_ns - run.frame_t_ns[f])))
         truth = gt.positions_m[g, j]
-        rows = np.flatnonzero((run.target_frame == f) & (run.target_state != Phase.LOST.code))
+        span = run.frame_rows(int(f))
+        rows = np.arange(span.start, span.stop)
+        rows = rows[run.target_state[rows] != Phase.LOST.code]
         if not np.isfinite(truth).all() or len(rows) == 0:
             continue
         d = np.linalg.norm(run.target_pos_m[rows] - truth, axis=1)

@@ -31,7 +31,7 @@ def _empty() -> CandidateSet:
     )
 
 
-def _gauss(x: np.ndarray, sigma: float) -> np.ndarray:
+def gauss_term(x: np.ndarray, sigma: float) -> np.ndarray:
     """exp(-x^2 / (2 sigma^2)); 0 where x is not finite."""
     with np.errstate(invalid="ignore", over="ignore"):
         g = np.exp(-0.5 * np.square(x / sigma))
@@ -316,8 +316,8 @@ def make_candidates(
         ahead2 = np.einsum("ij,ij->i", points - o2, d2) > 0
         geometric = ahead1 & ahead2 & (half_gap <= cfg.max_gap_m) & (points[:, 2] >= cfg.min_z_m)
     # eq. 25 (relative v consistency) and eq. 26 (reconstruction error)
-    p_o = _gauss(rel_v_all[ia] - rel_v_all[ib], cfg.sigma_rel_v)
-    p_t = _gauss(half_gap, cfg.sigma_gap_m)
+    p_o = gauss_term(rel_v_all[ia] - rel_v_all[ib], cfg.sigma_rel_v)
+    p_t = gauss_term(half_gap, cfg.sigma_gap_m)
     keep = geometric & (p_o >= cfg.term_threshold) & (p_t >= cfg.term_threshold)
     keep &= p_o * p_t >= cfg.prior_threshold  # p_b <= 1 cannot raise the product
     if not keep.any():

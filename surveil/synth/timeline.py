@@ -418,16 +418,23 @@ class Compiler:
     def do_approach(self, act: ActionSpec, actor: Actor, t0: float) -> None:
         self.do_handshake(act, actor, t0, gap_m=act.gap_m)
 
-    def do_give(self, act: ActionSpec, actor: Actor, t0: float) -> None:
+    def _held(
+        self, act: ActionSpec, actor: Actor, t0: float, verb: str, hint: str = ""
+    ) -> tuple[ObjectTrack, str]:
+        """The object an action needs the actor to hold at ``t0``, and the hand side holding
+        it; a ConfigError naming the action otherwise."""
         obj = self.objects[act.object]
         holder = obj.holder_at(t0)
         if not holder.startswith(f"{actor.pid}/"):
             raise ConfigError(
-                f"actions (at_s = {act.at_s}, {act.person} give): "
+                f"actions (at_s = {act.at_s}, {act.person} {verb}): "
                 f"{act.person} does not hold {act.object!r} then "
-                f"(holder: {holder or 'nobody'}); pick it first"
+                f"(holder: {holder or 'nobody'}){hint}"
             )
-        side = holder.split("/")[1].removesuffix("_hand")
+        return obj, holder.split("/")[1].removesuffix("_hand")
+
+    def do_give(self, act: ActionSpec, actor: Actor, t0: float) -> None:
+        obj, side = self._held(act, actor, t0, "give", "; pick it first")
         if act.hand and act.hand != side:
             raise ConfigError(
                 f"actions (at_s = {act.at_s}, give): {act.object!r} is in the "
@@ -502,14 +509,7 @@ class Compiler:
         self.event("pick", t0, climax, end, (label,), (actor.pid,), act.object)
 
     def do_place(self, act: ActionSpec, actor: Actor, t0: float) -> None:
-        obj = self.objects[act.object]
-        holder = obj.holder_at(t0)
-        if not holder.startswith(f"{actor.pid}/"):
-            raise ConfigError(
-                f"actions (at_s = {act.at_s}, place): {act.person} does not "
-                f"hold {act.object!r} then (holder: {holder or 'nobody'})"
-            )
-        side = holder.split("/")[1].removesuffix("_hand")
+        obj, side = self._held(act, actor, t0, "place")
         if act.where:
             centre, top = self.tops[act.where]
             xy = centre + (np.array(act.position_m) if len(act.position_m) == 2 else 0.0)
@@ -525,7 +525,8 @@ class Compiler:
         obj.states.append((climax + 0.5 * still, "", rest))
         end = climax + still + self.jitter(0.75)
         actor.hands[side].move(climax + still, end, actor.rest(side))
-        self.event("place", t0, climax, end, (holder,), (actor.pid,), act.object)
+        hand = f"{actor.pid}/{side}_hand"
+        self.event("place", t0, climax, end, (hand,), (actor.pid,), act.object)
 
     def do_touch_face(self, act: ActionSpec, actor: Actor, t0: float) -> None:
         side = act.hand or "right"
