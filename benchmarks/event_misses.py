@@ -1,7 +1,7 @@
 """What happened to every true activity event in a run: recognised, or where it was lost.
 
     python benchmarks/event_misses.py [--out out/bench_synth] [--seed 0] [--rerun] [--config TOML]
-        [NAME ...]
+        [--trace] [NAME ...]
 
 Reads ``out/bench_synth/<name>[.<config stem>].mcap`` (written by
 ``benchmarks/pipeline_bench.py``; run here when missing or with ``--rerun``) and the ground
@@ -19,6 +19,10 @@ Verdicts:
   never in the combined state: the other's tracker was lost or had drifted onto it;
 - ``not combined``: both actors tracked, never combined;
 - ``tracked``: (one-hand events) the hand was tracked, no event followed.
+
+``--trace`` adds, under every event that was not recognised, its window frame by frame: for
+each actor the nearest tracker (label, state, error to the truth), the true distance between
+the actors and the distance between their trackers.
 """
 
 from __future__ import annotations
@@ -43,12 +47,13 @@ BEFORE_S, AFTER_S, CLIMAX_S, MATCH_S = 0.7, 0.5, 0.3, 1.0
 
 def _actor_tracks(
     run: RunData, gt: GroundTruth, actor: str, frames: np.ndarray, gate_m: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """Per output frame: the tracker nearest to the true actor within ``gate_m`` (-1: none)
-    and its state code."""
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per output frame: the tracker nearest to the true actor within ``gate_m`` (-1: none),
+    its state code and its target row (-1: none)."""
     j = gt.labels.index(actor)
     trackers = np.full(len(frames), -1)
     states = np.full(len(frames), 255)
+    target_rows = np.full(len(frames), -1)
     for k, f in enumerate(frames):
         g = int(np.argmin(np.abs(gt.t_ns - run.frame_t_ns[f])))
         truth = gt.positions_m[g, j]
@@ -62,7 +67,51 @@ def _actor_tracks(
             r = rows[int(d.argmin())]
             trackers[k] = run.target_tracker[r]
             states[k] = run.target_state[r]
-    return trackers, states
+            target_rows[k] = r
+    return trackers, states, target_rows
+
+
+def _window(run: RunData, climax_ns: int) -> np.ndarray:
+    """Output frames from BEFORE_S before to AFTER_S after a climax."""
+    return np.flatnonzero(
+        (run.frame_t_ns >= climax_ns - BEFORE_S * 1e9)
+        & (run.frame_t_ns <= climax_ns + AFTER_S * 1e9)
+    )
+
+
+_STATE = {p.code: p.value for p in Phase}
+
+
+def trace(event: ActivityEvent, run: RunData, gt: GroundTruth, gate_m: float) -> list[str]:
+    """The event's window frame by frame (lines of text, see the module docstring)."""
+    frames = _window(run, event.climax_ns)
+    actors = [a for a in event.actors if a in gt.labels]
+    rows = [_actor_tracks(run, gt, a, frames, gate_m)[2] for a in actors]
+    lines = []
+    for k, f in enumerate(frames):
+        g = int(np.argmin(np.abs(gt.t_ns - run.frame_t_ns[f])))
+        cells = [f"{(run.frame_t_ns[f] - event.climax_ns) / 1e9:+.2f}s"]
+        for a, r in zip(actors, rows, strict=True):
+            if r[k] < 0:
+                cells.append(f"{a}: -")
+                continue
+            err = np.linalg.norm(run.target_pos_m[r[k]] - gt.positions_m[g, gt.labels.index(a)])
+            state = _STATE.get(int(run.target_state[r[k]]), "?")
+            cells.append(
+                f"{a}: t{run.target_tracker[r[k]]} {run.target_label[r[k]]} {state} "
+                f"{err * 1000:.0f}mm"
+            )
+        if len(actors) == 2:
+            true_d = np.linalg.norm(
+                gt.positions_m[g, gt.labels.index(actors[0])]
+                - gt.positions_m[g, gt.labels.index(actors[1])]
+            )
+            cells.append(f"apart {true_d * 1000:.0f}mm")
+            if rows[0][k] >= 0 and rows[1][k] >= 0:
+                d = np.linalg.norm(run.target_pos_m[rows[0][k]] - run.target_pos_m[rows[1][k]])
+                cells.append(f"trackers {d * 1000:.0f}mm")
+        lines.append("    " + " | ".join(cells))
+    return lines
 
 
 def verdict(event: ActivityEvent, run: RunData, gt: GroundTruth, gate_m: float) -> tuple[str, str]:
@@ -73,11 +122,9 @@ def verdict(event: ActivityEvent, run: RunData, gt: GroundTruth, gate_m: float) 
         return "recognised", ""
     if near:
         return "other event", ", ".join(sorted({e.activity for e in near}))
-    frames = np.flatnonzero(
-        (run.frame_t_ns >= climax - BEFORE_S * 1e9) & (run.frame_t_ns <= climax + AFTER_S * 1e9)
-    )
+    frames = _window(run, climax)
     hands = [a for a in event.actors if a in gt.labels]
-    tracks = [_actor_tracks(run, gt, a, frames, gate_m) for a in hands]
+    tracks = [_actor_tracks(run, gt, a, frames, gate_m)[:2] for a in hands]
     tracked = [float(np.mean(t >= 0)) for t, _ in tracks]
     detail = ", ".join(f"{a} {f:.0%}" for a, f in zip(hands, tracked, strict=True))
     if min(tracked, default=0.0) < 0.6:
@@ -102,6 +149,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--rerun", action="store_true", help="run the pipeline again")
     parser.add_argument("--config", type=Path, help="pipeline settings (TOML) of the run")
     parser.add_argument("--gate-m", type=float, default=0.15, help="tracker-actor gate, m")
+    parser.add_argument(
+        "--trace", action="store_true", help="print each missed event's window frame by frame"
+    )
     args = parser.parse_args(argv)
     names = args.names or sorted(p.stem for p in (ROOT / "recordings").glob("*.toml"))
     totals: Counter = Counter()
@@ -121,6 +171,8 @@ def main(argv: list[str] | None = None) -> int:
                 f"| {name} | {event.activity} | {climax_s:.2f} | {', '.join(event.actors)} "
                 f"| {v} | {detail} |"
             )
+            if args.trace and v != "recognised":
+                print("\n".join(trace(event, run, gt, args.gate_m)))
     print("\n" + ", ".join(f"{k}: {n}" for k, n in totals.most_common()))
     return 0
 

@@ -35,6 +35,9 @@ Choices where the paper is silent, written down here:
   combine distance of another tracker has most likely slid onto that target's candidates; it
   is lost rather than combined, so that a real coincidence (both trackers supported while
   approaching) is not confused with a tracker that lost its own target.
+- A tracker that never joined a person and comes within the combine distance of a tracker of
+  a person is a duplicate of that target or a ghost beside it (a mismatched blob pair): it is
+  treated as drifted (lost), and the person's tracker does not combine with it.
 - Losing support beats every other transition (a combined pair with no candidate is lost,
   both trackers at once, since they share one pooled likelihood level).
 """

@@ -80,6 +80,8 @@ class _Track:
     before_vec_m: np.ndarray | None = None
     apart_frames: int = 0
     split_m: np.ndarray | None = None  # (2, 3) the two modes of a combined pair this frame
+    split_first_m: float = 0.0  # distance between the modes when they first appeared
+    split_gain_m: float = 0.0  # how much farther apart they are now
     split_vel_mps: np.ndarray | None = None  # (2, 3) their velocities
     history: deque = field(default_factory=lambda: deque(maxlen=HISTORY_FRAMES))
 
@@ -204,10 +206,11 @@ class MultiTargetTracker:
         self._measure_separation(pts, prior, dt_s)
         seeds = self._update_seeds(pts, prior, dt_s)
         reacquired = self._reacquire(seeds, t_ns)
+        parted = self._split_on_seeds(seeds, set(reacquired.values()))
         rel_v = self._candidate_rel_v(candidates, observations)
         self._label(pts, rel_v, t_ns)
         transitions = self._advance_phases(t_ns, pairs, drifted, reacquired)
-        transitions += self._initialise(seeds, set(reacquired.values()), t_ns)
+        transitions += self._initialise(seeds, set(reacquired.values()) | parted, t_ns)
         return self._frame(t_ns, transitions)
 
     def _step_s(self, t_ns: int) -> float:
@@ -233,13 +236,10 @@ class MultiTargetTracker:
         act_tracks = [tracks[b] for b in blocks]
         rows = self._block_rows(blocks)
         is_head = np.repeat([tr.is_hand is False for tr in act_tracks], n)
-        # hands (and untyped targets): a mixture of smooth and jerky accelerations
-        jerk = self._rng.random(len(rows)) < fcfg.jerk_fraction
-        accel = np.where(
-            is_head,
-            fcfg.accel_std_head_mps2,
-            np.where(jerk, fcfg.accel_std_jerk_mps2, fcfg.accel_std_hand_mps2),
-        )
+        # hands (and untyped targets): a mixture of smooth constant-velocity motion and
+        # stop-and-go (a fresh velocity), because hands start and stop abruptly
+        reset = ~is_head & (self._rng.random(len(rows)) < fcfg.reset_fraction)
+        accel = np.where(is_head, fcfg.accel_std_head_mps2, fcfg.accel_std_hand_mps2)
         st = sir.predict_constant_velocity(
             self._states[rows],
             accel,
@@ -248,6 +248,14 @@ class MultiTargetTracker:
             jitter_m=fcfg.position_jitter_m,
             max_speed_mps=fcfg.max_speed_mps,
         )
+        if reset.any():
+            st[reset] = sir.predict_velocity_reset(
+                self._states[rows[reset]],
+                fcfg.reset_speed_std_mps,
+                dt_s,
+                self._rng,
+                jitter_m=fcfg.position_jitter_m,
+            )
         starts = np.arange(len(blocks)) * n
         weights = prior
         shares = np.ones((len(blocks), len(pts)))
@@ -350,7 +358,13 @@ class MultiTargetTracker:
             if a.id in pairs or b.id in pairs or a.id in drifted or b.id in drifted:
                 continue
             bad = [tr for tr in (a, b) if tr.since_miss < lc.drift_window_frames]
-            if bad and not hands[k]:  # the one that missed most recently slid onto the other
+            stray = [tr for tr in (a, b) if not tr.ever_labelled and tr.person == 0]
+            if len(stray) == 1 and (a if stray[0] is b else b).person > 0:
+                # a tracker that never joined a person meets one that did: it is a duplicate
+                # of that target or a ghost beside it (mismatched blob pair), not a second
+                # target -- combining would hand the person's label to an empty pair
+                drifted.add(stray[0].id)
+            elif bad and not hands[k]:  # the one that missed most recently slid onto the other
                 drifted.add(min(bad, key=lambda tr: (tr.since_miss, -tr.id)).id)
             else:
                 pairs[a.id], pairs[b.id] = b.id, a.id
@@ -364,7 +378,10 @@ class MultiTargetTracker:
         exclusion share of at least a half; ``separate_min_prior`` or more), the strongest
         and the strongest of those at least ``separate_distance_m`` from it exist; both
         trackers record them (``split_m``) and their velocities from the previous frame's
-        modes, and count the consecutive frames (``apart_frames``)."""
+        modes, count the consecutive frames (``apart_frames``) and how much farther apart the
+        modes moved since they appeared (``split_gain_m``): parting targets move apart, while
+        a stray candidate beside joined hands (a bare forearm, a mismatched blob pair) stays
+        where it appeared."""
         lc = self.cfg.lifecycle
         done: set[int] = set()
         for tr in self._tracks.values():
@@ -397,10 +414,14 @@ class MultiTargetTracker:
                 continued = bool((step <= lc.mode_gate_m).all())
                 vel = (split - prev) / dt_s if continued else vel
             apart = 0 if split is None else (tr.apart_frames + 1 if continued else 1)
+            dist = 0.0 if split is None else float(np.linalg.norm(split[1] - split[0]))
+            first = dist if apart <= 1 else tr.split_first_m
             for t in (tr, other):
                 t.apart_frames = apart
                 t.split_m = split
                 t.split_vel_mps = vel
+                t.split_first_m = first
+                t.split_gain_m = dist - first
 
     def _unexplained(self, pts: np.ndarray, prior: np.ndarray, min_prior: float) -> np.ndarray:
         """Indices of candidates with prior >= min_prior farther than explained_radius_m
@@ -444,6 +465,45 @@ class MultiTargetTracker:
                 seeds.append(_Pending(pts[k].copy(), 1, np.zeros(3)))
         self._pending = seeds
         return seeds
+
+    def _split_on_seeds(self, seeds: list[_Pending], used: set[int]) -> set[int]:
+        """Part combined pairs on confirmed seeds near them; returns the seeds used.
+
+        A target leaving a combined pair is the pair's second mode; when it left faster than
+        the mode measurement follows (a frame without its candidate, a jump beyond
+        ``separate_gate_m``), its candidate turns into a seed. Started as a new tracker it
+        would take that candidate from the pair, which then never separates and keeps both
+        labels on the target that stayed. So a confirmed seed within ``pair_seed_gate_m`` of a
+        combined pair (and at least ``separate_distance_m`` from it) becomes the pair's second
+        mode (the pair's estimate the first), and the pair separates by the angle rule."""
+        lc = self.cfg.lifecycle
+        out: set[int] = set()
+        parted: set[int] = set()
+        free = [
+            i for i, sd in enumerate(seeds) if i not in used and sd.count >= lc.init_confirm_frames
+        ]
+        for tr in self._tracks.values():
+            if tr.phase is not Phase.COMBINED or tr.partner not in self._tracks or not free:
+                continue
+            if tr.id in parted or tr.apart_frames >= lc.separate_frames:
+                continue
+            d = np.array([np.linalg.norm(seeds[i].position_m - tr.mean_m) for i in free])
+            k = int(np.argmin(d))
+            if not lc.separate_distance_m <= d[k] <= lc.pair_seed_gate_m:
+                continue
+            idx = free.pop(k)
+            seed = seeds[idx]
+            other = self._tracks[tr.partner]
+            split = np.array([tr.mean_m, seed.position_m])
+            vel = np.array([tr.vel_mps, seed.velocity_mps])
+            for t in (tr, other):
+                t.split_m, t.split_vel_mps = split, vel
+                t.apart_frames = lc.separate_frames
+                t.split_gain_m = np.inf
+            out.add(idx)
+            parted.update((tr.id, other.id))
+            log.debug("t%d / t%d part on a new candidate at %s", tr.id, other.id, seed.position_m)
+        return out
 
     def _reacquire(self, seeds: list[_Pending], t_ns: int) -> dict[int, int]:
         """Lost tracker id -> index of the confirmed seed that re-acquires it.
@@ -649,7 +709,8 @@ class MultiTargetTracker:
                 misses=tr.misses,
                 drifted=tr.id in drifted,
                 partner_id=pairs.get(tr.id),
-                separated=tr.apart_frames >= lc.separate_frames,
+                separated=tr.apart_frames >= lc.separate_frames
+                and tr.split_gain_m >= lc.separate_gain_m,
                 labelled=tr.labelled,
                 reacquired=tr.id in reacquired,
                 lost_for_s=(t_ns - tr.lost_since_ns) * 1e-9

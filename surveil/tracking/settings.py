@@ -28,15 +28,15 @@ class FilterConfig:
     accel_std_hand_mps2: float = setting(
         8.0, "acceleration noise of hands and untyped targets (fast, abrupt), m/s^2", min=0.0
     )
-    jerk_fraction: float = setting(
+    reset_fraction: float = setting(
         0.2,
-        "share of hand particles predicted with the jerk noise instead (hands start and stop "
-        "abruptly: a two-component mixture prior)",
+        "share of hand particles predicted with a fresh velocity instead (hands stop, start "
+        "and turn abruptly: a two-component mixture prior, docs/tracking.md)",
         min=0.0,
         max=1.0,
     )
-    accel_std_jerk_mps2: float = setting(
-        40.0, "acceleration noise of that share of hand particles, m/s^2", min=0.0
+    reset_speed_std_mps: float = setting(
+        0.8, "std of each component of that fresh velocity, m/s", min=0.0
     )
     accel_std_head_mps2: float = setting(
         2.0, "acceleration noise of heads (slow, smooth), m/s^2", min=0.0
@@ -125,8 +125,22 @@ class LifecycleConfig:
         "stray candidate near joined hands must not part them), m",
         min=0.0,
     )
+    pair_seed_gate_m: float = setting(
+        0.6,
+        "a new candidate confirmed this close to a combined pair (and at least "
+        "separate_distance_m from it) is one of its targets leaving: the pair separates onto "
+        "it instead of a new tracker starting there, m",
+        min=0.0,
+    )
     separate_frames: int = setting(
         2, "consecutive frame sets the modes must stay apart before separating", min=1
+    )
+    separate_gain_m: float = setting(
+        0.08,
+        "a combined pair separates only once its modes moved this much farther apart since "
+        "they first appeared (parting targets do; a stray candidate beside joined hands does "
+        "not move away from them), m",
+        min=0.0,
     )
     lost_level: float = setting(
         0.05,

@@ -128,6 +128,59 @@ def predict_constant_velocity(
     return out
 
 
+def predict_velocity_reset(
+    states: np.ndarray,
+    speed_std_mps: float,
+    dt_s: float,
+    rng: np.random.Generator,
+    *,
+    jitter_m: float = 0.0,
+) -> np.ndarray:
+    """Sample the stop-and-go component of a hand's motion prior: a fresh velocity.
+
+        v_k ~ N(0, s_v^2 I),   p_k = p_{k-1} + v_k dt + e,   e ~ N(0, jitter^2 I)
+
+    The old velocity is forgotten: the hand stopped, started or turned within the step. A
+    particle of this component that lands on a candidate d metres away carries the velocity
+    d / dt -- the average over the step. The alternative, a wide acceleration noise on the
+    constant-velocity model, gives the same particle 2 d / dt plus its old velocity, and a
+    tracker that resampled onto it overshoots by d on the next step (docs/tracking.md).
+
+    Parameters
+    ----------
+    states : (N, 6) float64
+        ``(x, y, z, vx, vy, vz)``, metres and m/s, world frame.
+    speed_std_mps : float
+        s_v, std of each component of the new velocity, m/s.
+    dt_s : float
+        Time step, s (>= 0).
+    rng : np.random.Generator
+    jitter_m : float
+        Std of an extra position random walk, metres.
+
+    Returns
+    -------
+    (N, 6) float64
+        New states (a new array).
+
+    Examples
+    --------
+    >>> s = np.array([[0.0, 0, 1, 1, 0, 0]])
+    >>> predict_velocity_reset(s, 0.0, 0.5, np.random.default_rng(0)).tolist()
+    [[0.0, 0.0, 1.0, 0.0, 0.0, 0.0]]
+    """
+    require_shape("states", states, (None, STATE_DIM), np.floating)
+    if not dt_s >= 0:
+        raise ValueError(f"dt_s must be >= 0, got {dt_s}")
+    n = len(states)
+    out = np.empty_like(states)
+    out[:, VEL] = rng.standard_normal((n, 3)) * speed_std_mps
+    out[:, POS] = states[:, POS] + out[:, VEL] * dt_s
+    if jitter_m > 0:
+        out[:, POS] += rng.standard_normal((n, 3)) * jitter_m
+    return out
+
+
 def candidate_log_likelihood(
     points_m: np.ndarray,
     cand_points_m: np.ndarray,

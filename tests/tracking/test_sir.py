@@ -134,6 +134,21 @@ def test_prediction_noise_has_the_model_variance(rng):
     assert np.std(out[:, 3]) == pytest.approx(0.6, rel=0.05)
 
 
+def test_velocity_reset_forgets_the_old_velocity(rng):
+    """The stop-and-go component: a fresh velocity around zero whatever the old one was, and
+    the position moved by it over the step (a particle that lands d away carries d / dt)."""
+    s = np.tile([1.0, 2.0, 1.0, 3.0, -2.0, 0.0], (20000, 1))
+    out = sir.predict_velocity_reset(s, 0.8, 0.1, rng)
+    assert np.allclose(out[:, 3:].mean(axis=0), 0.0, atol=0.02)
+    assert np.allclose(out[:, 3:].std(axis=0), 0.8, rtol=0.05)
+    assert np.allclose(out[:, :3], s[:, :3] + out[:, 3:] * 0.1)
+    jittered = sir.predict_velocity_reset(s, 0.0, 0.1, rng, jitter_m=0.01)
+    assert np.allclose(jittered[:, 3:], 0.0)
+    assert np.std(jittered[:, 0]) == pytest.approx(0.01, rel=0.05)
+    with pytest.raises(ValueError, match="dt_s"):
+        sir.predict_velocity_reset(s, 0.8, -0.1, rng)
+
+
 def test_block_mean_cov_matches_numpy(rng):
     pts = rng.normal(size=(12, 3))
     w = rng.random(12)
