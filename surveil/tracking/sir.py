@@ -166,8 +166,8 @@ def predict_velocity_reset(
     Examples
     --------
     >>> s = np.array([[0.0, 0, 1, 1, 0, 0]])
-    >>> predict_velocity_reset(s, 0.0, 0.5, np.random.default_rng(0)).tolist()
-    [[0.0, 0.0, 1.0, 0.0, 0.0, 0.0]]
+    >>> predict_velocity_reset(s, 0.0, 0.5, np.random.default_rng(0))[0, :4].tolist()
+    [0.0, 0.0, 1.0, 0.0]
     """
     require_shape("states", states, (None, STATE_DIM), np.floating)
     if not dt_s >= 0:
