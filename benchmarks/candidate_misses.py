@@ -1,6 +1,7 @@
 """Why true limbs go without a 3-D candidate: every miss of the candidate benchmark, by cause.
 
-    python benchmarks/candidate_misses.py [--out out/bench_synth] [--max-frames N] [NAME ...]
+    python benchmarks/candidate_misses.py [--out out/bench_synth] [--max-frames N]
+        [--approach S] [NAME ...]
 
 For every true head or hand seen by >= 2 cameras (ground truth) with no candidate within
 100 mm (the miss of ``candidates_bench.py``), the first stage that lost it:
@@ -18,6 +19,10 @@ For every true head or hand seen by >= 2 cameras (ground truth) with no candidat
   it; named after the term furthest below its threshold (or ``prior product``);
 - ``merging``: the pair survives the prior but is absorbed by a candidate > 100 mm away;
 - ``explained away``: dropped as a ghost (docs/candidates.md).
+
+``--approach S`` counts only the actors of the true events (the hands, or hand and head, that
+meet) during the S seconds up to each climax: the approach, where a lost candidate costs the
+tracker its target just before the decision point.
 
 Blobs are extracted with the true number of people as N_h (the tracker's head count in a
 run); the recording's own (slightly wrong) calibration is used throughout, as in a run.
@@ -144,8 +149,24 @@ def classify_miss(
     return "merging"
 
 
+def approach_mask(gt, approach_s: float) -> np.ndarray:
+    """(F, L) bool: the limb is an actor of a true event whose climax is at most
+    ``approach_s`` after the frame set (and not before it)."""
+    mask = np.zeros(gt.positions_m.shape[:2], dtype=bool)
+    for ev in gt.events:
+        rows = (gt.t_ns <= ev.climax_ns) & (gt.t_ns >= ev.climax_ns - approach_s * 1e9)
+        for actor in ev.actors:
+            if actor in gt.labels:
+                mask[rows, gt.labels.index(actor)] = True
+    return mask
+
+
 def misses_of(
-    rec_dir: Path, max_frames: int | None, radius_px: float, config: PipelineConfig
+    rec_dir: Path,
+    max_frames: int | None,
+    radius_px: float,
+    config: PipelineConfig,
+    approach_s: float | None = None,
 ) -> tuple[Counter, int, float]:
     """Miss causes, the number of countable limb-frames, false candidates per frame set."""
     rec = open_recording(rec_dir)
@@ -154,6 +175,7 @@ def misses_of(
     no_explaining = dataclasses.replace(cfg, explain_away=False)
     n_people = len({lab.split("/")[0] for lab in gt.labels})
     cam_index = {c: rec.rig.names.index(c) for c in gt.cameras}
+    only = approach_mask(gt, approach_s) if approach_s is not None else None
     causes: Counter = Counter()
     countable = n_sets = false = 0
     for fs, by_name, _ in observe_recording(rec, config, n_people, max_frames):
@@ -165,6 +187,8 @@ def misses_of(
         i = int(np.searchsorted(gt.frames, fs.index))
         truth = gt.positions_m[i]
         seen2 = np.isfinite(truth).all(axis=1) & (gt.n_views[i] >= 2)
+        if only is not None:
+            seen2 &= only[i]
         countable += int(seen2.sum())
         n_sets += 1
         missed = seen2.copy()
@@ -189,6 +213,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--max-frames", type=int, default=None)
     parser.add_argument("--radius-px", type=float, default=10.0, help="R, px")
     parser.add_argument("--config", type=Path, help="pipeline settings (TOML) to diagnose")
+    parser.add_argument(
+        "--approach", type=float, metavar="S", help="only event actors, S s before each climax"
+    )
     args = parser.parse_args(argv)
     config = load_pipeline_config(args.config)
     paths = [ROOT / "recordings" / f"{n}.toml" for n in args.names] or sorted(
@@ -200,7 +227,9 @@ def main(argv: list[str] | None = None) -> int:
     for path in paths:
         rec_dir = args.out / path.stem
         synthesise(path, rec_dir)
-        causes, n, false = misses_of(rec_dir, args.max_frames, args.radius_px, config)
+        causes, n, false = misses_of(
+            rec_dir, args.max_frames, args.radius_px, config, args.approach
+        )
         cells = " | ".join(f"{causes[c] / max(n, 1):.3f}" for c in CAUSES)
         missed = sum(causes.values()) / max(n, 1)
         print(f"| {path.stem} | {n} | {false:.2f} | {missed:.3f} | {cells} |", flush=True)

@@ -101,6 +101,7 @@ class _Person:
     born_ns: int
     facing_ev: np.ndarray = field(default_factory=lambda: np.zeros(2))
     hand_ids: list[int] = field(default_factory=list)
+    contradicted_ns: int | None = None  # since when the facing says its sides are swapped
 
 
 @dataclass(slots=True)
@@ -596,6 +597,7 @@ class MultiTargetTracker:
         self._attach_hands(t_ns)
         self._update_facing()
         self._decide_sides(t_ns)
+        self._revise_sides(t_ns)
 
     def _near_head(self, tr: _Track) -> bool:
         for p in self._persons.values():
@@ -692,6 +694,45 @@ class MultiTargetTracker:
                 undecided, lab.decide_left_right(hand_m, head_m, facing), strict=True
             ):
                 h.limb = limb
+
+    def _revise_sides(self, t_ns: int) -> None:
+        """Swap a person's left and right hands when strong facing evidence has said so for
+        ``lr_revise_s``: a decision taken early on a guess (a lone person standing still) is
+        overturned once the person reaches or claps in front of the body. Both hands must be
+        tracked (normal) and clearly apart sideways, so crossed hands for a moment do not
+        count."""
+        lcfg = self.cfg.labelling
+        if lcfg.lr_revise_evidence <= 0:
+            return
+        for p in self._persons.values():
+            head = self._tracks.get(p.head_id) if p.head_id is not None else None
+            hands = {
+                self._tracks[h].limb: self._tracks[h]
+                for h in p.hand_ids
+                if h in self._tracks and self._tracks[h].phase is Phase.NORMAL
+            }
+            left, right = hands.get(Limb.LEFT_HAND), hands.get(Limb.RIGHT_HAND)
+            if (
+                head is None
+                or head.phase not in ACTIVE
+                or left is None
+                or right is None
+                or np.linalg.norm(p.facing_ev) < lcfg.lr_revise_evidence
+            ):
+                p.contradicted_ns = None
+                continue
+            lat = lab.lateral_offsets_m(
+                np.array([left.mean_m, right.mean_m]), head.mean_m, p.facing_ev
+            )
+            if lat[0] - lat[1] > -lcfg.lr_revise_margin_m:
+                p.contradicted_ns = None
+                continue
+            if p.contradicted_ns is None:
+                p.contradicted_ns = t_ns
+            if (t_ns - p.contradicted_ns) * 1e-9 >= lcfg.lr_revise_s:
+                left.limb, right.limb = Limb.RIGHT_HAND, Limb.LEFT_HAND
+                p.contradicted_ns = None
+                log.debug("p%d: left / right swapped (t%d, t%d)", p.number, left.id, right.id)
 
     # ------------------------------------------------------------------ 5: state machine
 

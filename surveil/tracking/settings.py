@@ -255,6 +255,19 @@ class LabellingConfig:
         "a lone hand must be this far left or right of the head to be decided early, m",
         min=0.0,
     )
+    lr_revise_evidence: float = setting(
+        1.0,
+        "facing evidence needed to overturn decided left / right labels (0 = never revise)",
+        min=0.0,
+    )
+    lr_revise_margin_m: float = setting(
+        0.1,
+        "the labelled left hand must be this far right of the right hand to count against, m",
+        min=0.0,
+    )
+    lr_revise_s: float = setting(
+        1.0, "... for this long before the two hands' sides are swapped, s", min=0.0
+    )
     walk_speed_mps: float = setting(
         0.3, "head speed above which the walking direction is facing evidence, m/s", min=0.0
     )

@@ -14,7 +14,13 @@ from surveil.datatypes import (
     Silhouettes,
     TrackFrame,
 )
-from surveil.tracking import FilterConfig, LifecycleConfig, MultiTargetTracker, TrackingConfig
+from surveil.tracking import (
+    FilterConfig,
+    LabellingConfig,
+    LifecycleConfig,
+    MultiTargetTracker,
+    TrackingConfig,
+)
 
 DT_NS = 66_666_667  # 15 fps
 
@@ -164,6 +170,34 @@ def test_a_person_who_leaves_is_retired(rig, rng):
     assert changes.count((Phase.LOST, Phase.UNINITIALISED)) == 6
     assert all(s.phase is Phase.LOST for s in out[40].targets)
     assert out[-1].targets == () and len(out[-1].particles_m) == 0
+
+
+def test_sides_guessed_wrong_are_swapped_once_the_person_reaches_forward(rig, rng):
+    # a lone person standing still facing away from the middle of the rig: left / right are
+    # guessed (facing the middle), wrongly; then both hands reach forward and stay apart
+    a = body((3.5, 2.0), 0.0)
+    rest = [a["left_hand"], a["right_hand"]]
+    ahead = [a["head"] + 0.35 * a["fwd"] + s * 0.15 * a["left"] - [0, 0, 0.6] for s in (1, -1)]
+    frames = [[a["head"], *rest]] * 40 + [
+        [a["head"], *(r + min(i / 10, 1.0) * (h - r) for r, h in zip(rest, ahead, strict=True))]
+        for i in range(1, 41)
+    ]
+    out = run(MultiTargetTracker(LONE, rig, seed=2), frames, rng)
+    guessed = by_label(out[39])
+    assert guessed["p1/left_hand"][1] < a["head"][1]  # the guess put the left hand on the right
+    final = by_label(out[-1])
+    assert np.linalg.norm(final["p1/left_hand"] - ahead[0]) < 0.03
+    assert np.linalg.norm(final["p1/right_hand"] - ahead[1]) < 0.03
+    swapped_at = next(
+        i for i, f in enumerate(out) if i > 40 and by_label(f)["p1/left_hand"][1] > a["head"][1]
+    )
+    assert swapped_at <= 40 + 30  # about lr_revise_s (15 frame sets) after the reach
+    # with revision off the guess stands
+    cfg = TrackingConfig(
+        lifecycle=LONE.lifecycle, labelling=LabellingConfig(lr_revise_evidence=0.0)
+    )
+    kept = by_label(run(MultiTargetTracker(cfg, rig, seed=2), frames, rng)[-1])
+    assert np.linalg.norm(kept["p1/right_hand"] - ahead[0]) < 0.03
 
 
 def clap_frames(cross: bool):
