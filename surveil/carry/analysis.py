@@ -447,7 +447,8 @@ class CarryAnalyser:
     -----
     State per hand target: a :class:`~surveil.carry.fusion.HueWindow` ring buffer of
     ``cfg.max_window_samples`` samples, a frozen flag and the last estimate; targets that
-    disappear from the input are forgotten, so memory does not grow with time.
+    disappear from the input are forgotten, so memory does not grow with time (lost ones are
+    kept, not analysed, until they are retired).
     """
 
     def __init__(self, cfg: CarryConfig, rig: Rig) -> None:
@@ -494,7 +495,9 @@ class CarryAnalyser:
         cfg = self.cfg
         hands = [t for t in targets if is_analysed_hand(t, cfg)]
         ids = [t.target_id for t in hands]
-        for gone in set(self._hands) - set(ids):
+        # a lost hand keeps its window and last estimate (not analysed meanwhile): re-acquired,
+        # it still holds what it held; only targets that are gone (retired) are forgotten
+        for gone in set(self._hands) - {t.target_id for t in targets}:
             del self._hands[gone]
         for tid in ids:
             if tid not in self._hands:

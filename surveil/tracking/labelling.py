@@ -37,9 +37,12 @@ the second if the angle between them is below 90 degrees, the other mode otherwi
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 
-from surveil.datatypes import Limb
+from surveil.camera import Rig
+from surveil.datatypes import CameraObservation, Limb
 from surveil.tracking.settings import LabellingConfig
 from surveil.validate import require_shape
 
@@ -100,6 +103,47 @@ def head_log_odds(
     rel_v = np.asarray(rel_v, dtype=np.float64)
     sil = np.clip((cfg.rel_v_mid - rel_v) / cfg.rel_v_scale, -c, c)
     return llr + np.where(np.isfinite(sil), sil, 0.0)
+
+
+def body_support(
+    head_m: np.ndarray,
+    rig: Rig,
+    observations: Mapping[str, CameraObservation],
+    cfg: LabellingConfig,
+) -> float | None:
+    """Fraction of the cameras seeing the column under a head in which it lies inside a
+    silhouette (within ``body_tolerance_px``); None when fewer than two cameras see it.
+
+    A head stands on a body: the points at ``body_heights`` (fractions of the head's height
+    above the floor) under it project into person silhouettes in every camera. A ghost head
+    (two heads' lines of sight crossing between two people, a mismatched blob pair) floats
+    over empty floor, which some camera sees as background.
+
+    Parameters
+    ----------
+    head_m : (3,) float64 -- world frame, z up from the floor, m
+    rig : Rig
+    observations : Mapping[str, CameraObservation] -- this frame set's, by camera name
+    cfg : LabellingConfig
+    """
+    head_m = np.asarray(head_m, dtype=np.float64)
+    column = np.repeat(head_m[None], len(cfg.body_heights), axis=0)
+    column[:, 2] = head_m[2] * np.asarray(cfg.body_heights, dtype=np.float64)
+    seeing = supported = 0
+    for name, obs in observations.items():
+        if name not in rig.names:
+            continue
+        cam = rig[name]
+        px, depth = cam.project(column)
+        if not cam.in_image(px, depth).all():
+            continue
+        dist = obs.silhouettes.dist_outside_px
+        h, w = dist.shape
+        u = np.clip(np.round(px[:, 0] * w / cam.width).astype(int), 0, w - 1)
+        v = np.clip(np.round(px[:, 1] * h / cam.height).astype(int), 0, h - 1)
+        seeing += 1
+        supported += int((dist[v, u] * cam.width / w <= cfg.body_tolerance_px).all())
+    return supported / seeing if seeing >= 2 else None
 
 
 def nearest_person(

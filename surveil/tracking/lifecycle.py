@@ -19,7 +19,7 @@ combined        the two modes stayed apart                      unlabelled
 lost            retired: lost for ``retire_s`` (or              uninitialised
                 ``retire_unlabelled_s`` if never labelled)
 lost            a candidate near its last position re-acquired  unlabelled
-                it
+                it, or (a hand) it met another hand unseen
 ==============  ==============================================  ==============
 
 Choices where the paper is silent, written down here:
@@ -38,6 +38,9 @@ Choices where the paper is silent, written down here:
 - A tracker that never joined a person and comes within the combine distance of a tracker of
   a person is a duplicate of that target or a ghost beside it (a mismatched blob pair): it is
   treated as drifted (lost), and the person's tracker does not combine with it.
+- A hand lost just before it meets another hand (their blobs merged, so its candidate
+  vanished) is re-acquired onto that hand when the other reaches its coasted position; the
+  two combine in the next frame set (the manager's ``_merge_lost``).
 - Losing support beats every other transition (a combined pair with no candidate is lost,
   both trackers at once, since they share one pooled likelihood level).
 """

@@ -64,6 +64,8 @@ class _Track:
     cov_m2: np.ndarray
     vel_mps: np.ndarray
     last_good_m: np.ndarray
+    last_good_ns: int = 0
+    last_good_vel_mps: np.ndarray = field(default_factory=lambda: np.zeros(3))
     person: int = 0
     limb: Limb = Limb.UNKNOWN
     is_hand: bool | None = None  # typed as hand (True) / head (False); None = not yet
@@ -77,6 +79,7 @@ class _Track:
     typed_frames: int = 0
     speed_ema_mps: float = 0.0
     partner: int | None = None
+    bodiless: bool = False  # failed the body check once: never a head
     before_vec_m: np.ndarray | None = None
     apart_frames: int = 0
     split_m: np.ndarray | None = None  # (2, 3) the two modes of a combined pair this frame
@@ -109,6 +112,7 @@ class _Pending:
     position_m: np.ndarray
     count: int
     velocity_mps: np.ndarray
+    first_m: np.ndarray  # where the seed first appeared
 
 
 class MultiTargetTracker:
@@ -154,6 +158,7 @@ class MultiTargetTracker:
         self._next_person = 1
         self._last_t_ns: int | None = None
         self._shares: dict[int, np.ndarray] = {}  # tracker id -> exclusion share per candidate
+        self._observations: Mapping[str, CameraObservation] = {}  # this frame set's
 
     # ------------------------------------------------------------------ public step
 
@@ -207,10 +212,12 @@ class MultiTargetTracker:
         self._measure_separation(pts, prior, dt_s)
         seeds = self._update_seeds(pts, prior, dt_s)
         reacquired = self._reacquire(seeds, t_ns)
+        merged = self._merge_lost(t_ns, reacquired, pairs, seeds)
         parted = self._split_on_seeds(seeds, set(reacquired.values()))
         rel_v = self._candidate_rel_v(candidates, observations)
+        self._observations = observations or {}
         self._label(pts, rel_v, t_ns)
-        transitions = self._advance_phases(t_ns, pairs, drifted, reacquired)
+        transitions = self._advance_phases(t_ns, pairs, drifted, reacquired, merged)
         transitions += self._initialise(seeds, set(reacquired.values()) | parted, t_ns)
         return self._frame(t_ns, transitions)
 
@@ -298,6 +305,8 @@ class MultiTargetTracker:
                 tr.misses = 0
                 tr.since_miss += 1
                 tr.last_good_m = tr.mean_m.copy()
+                tr.last_good_ns = self._last_t_ns
+                tr.last_good_vel_mps = tr.vel_mps.copy()
             tr.history.append((self._last_t_ns, tr.mean_m.copy()))
             a = self.cfg.labelling.evidence_alpha
             tr.speed_ema_mps = (1 - a) * tr.speed_ema_mps + a * float(np.linalg.norm(tr.vel_mps))
@@ -461,9 +470,9 @@ class MultiTargetTracker:
                 taken_prev.add(best)
                 prev = self._pending[best]
                 vel = (pts[k] - prev.position_m) / dt_s if dt_s > 0 else np.zeros(3)
-                seeds.append(_Pending(pts[k].copy(), prev.count + 1, vel))
+                seeds.append(_Pending(pts[k].copy(), prev.count + 1, vel, prev.first_m))
             else:
-                seeds.append(_Pending(pts[k].copy(), 1, np.zeros(3)))
+                seeds.append(_Pending(pts[k].copy(), 1, np.zeros(3), pts[k].copy()))
         self._pending = seeds
         return seeds
 
@@ -476,7 +485,9 @@ class MultiTargetTracker:
         would take that candidate from the pair, which then never separates and keeps both
         labels on the target that stayed. So a confirmed seed within ``pair_seed_gate_m`` of a
         combined pair (and at least ``separate_distance_m`` from it) becomes the pair's second
-        mode (the pair's estimate the first), and the pair separates by the angle rule."""
+        mode (the pair's estimate the first), and the pair separates by the angle rule. The
+        gate applies where the seed first appeared: a hand parting at 2.5 m/s is 70 cm away by
+        the time its seed is confirmed."""
         lc = self.cfg.lifecycle
         out: set[int] = set()
         parted: set[int] = set()
@@ -489,8 +500,9 @@ class MultiTargetTracker:
             if tr.id in parted or tr.apart_frames >= lc.separate_frames:
                 continue
             d = np.array([np.linalg.norm(seeds[i].position_m - tr.mean_m) for i in free])
-            k = int(np.argmin(d))
-            if not lc.separate_distance_m <= d[k] <= lc.pair_seed_gate_m:
+            d0 = np.array([np.linalg.norm(seeds[i].first_m - tr.mean_m) for i in free])
+            k = int(np.argmin(d0))
+            if not (d[k] >= lc.separate_distance_m and d0[k] <= lc.pair_seed_gate_m):
                 continue
             idx = free.pop(k)
             seed = seeds[idx]
@@ -529,6 +541,90 @@ class MultiTargetTracker:
         cost = np.where(d <= gate[:, None], d, 1e6)
         rows, cols = linear_sum_assignment(cost)
         return {lost[r].id: ok[c] for r, c in zip(rows, cols, strict=True) if cost[r, c] < 1e6}
+
+    def _merge_lost(
+        self,
+        t_ns: int,
+        reacquired: dict[int, int],
+        pairs: dict[int, int],
+        seeds: list[_Pending],
+    ) -> dict[int, int]:
+        """Lost hand id -> id of the hand it is re-acquired onto (it met that hand unseen).
+
+        Two hands that meet fast often lose one candidate a few frame sets before contact:
+        their blobs merge in some views, and the hand whose candidate vanished is lost while
+        the other tracker takes the merged candidate. The targets have come together, which
+        is the combined state's premise (section 5.2), so the lost hand (a hand of a person,
+        lost at most ``merge_lost_s``) is re-acquired onto a live hand of a person that is
+        near its coasted position (last supported position + velocity there x at most
+        ``merge_coast_s``): within ``hand_merge_distance_m``, growing by
+        ``reacquire_speed_mps`` per second coasted (the velocity estimate lags a hand that
+        accelerates). The two then combine in the next frame set and part like any combined
+        pair. The live hand must also be within ``merge_reach_m`` of the lost hand's last
+        supported position (a hand lost at 2 m/s would coast 60 cm in 0.3 s; hands lost
+        0.2-0.4 s before they meet were at most 50 cm from the meeting point on the bundled
+        scenes). Nearest first, one lost hand per live hand. A lost hand with a new candidate
+        (a seed, confirmed or not) within its re-acquisition gate is not merged: its target
+        is still seen on its own, and a tracker that drifted off its hand onto the other
+        must not make the two "meet"."""
+        lc = self.cfg.lifecycle
+        if lc.merge_lost_s <= 0:
+            return {}
+        lost = [
+            tr
+            for tr in self._tracks.values()
+            if tr.phase is Phase.LOST
+            and tr.id not in reacquired
+            and tr.is_hand
+            and tr.person > 0
+            and tr.lost_since_ns is not None
+            and (t_ns - tr.lost_since_ns) * 1e-9 <= lc.merge_lost_s
+        ]
+        live = [
+            tr
+            for tr in self._tracks.values()
+            if tr.phase in (Phase.UNLABELLED, Phase.NORMAL)
+            and tr.is_hand
+            and tr.person > 0
+            and tr.id not in pairs
+        ]
+        if seeds and lost:
+            sp = np.array([sd.position_m for sd in seeds])
+            lost = [
+                tr
+                for tr in lost
+                if np.linalg.norm(sp - tr.last_good_m, axis=1).min()
+                > min(
+                    lc.reacquire_gate_m + lc.reacquire_speed_mps * (t_ns - tr.last_good_ns) * 1e-9,
+                    lc.reacquire_max_m,
+                )
+            ]
+        if not lost or not live:
+            return {}
+        coast_s = np.minimum([(t_ns - tr.last_good_ns) * 1e-9 for tr in lost], lc.merge_coast_s)
+        coasted = np.array([tr.last_good_m for tr in lost]) + coast_s[:, None] * np.array(
+            [tr.last_good_vel_mps for tr in lost]
+        )
+        d = np.linalg.norm(coasted[:, None] - np.array([tr.mean_m for tr in live])[None], axis=2)
+        gate = lc.hand_merge_distance_m + lc.reacquire_speed_mps * coast_s
+        reach = np.linalg.norm(
+            np.array([tr.last_good_m for tr in lost])[:, None]
+            - np.array([tr.mean_m for tr in live])[None],
+            axis=2,
+        )
+        d = np.where((d < gate[:, None]) & (reach <= lc.merge_reach_m), d, np.inf)
+        out: dict[int, int] = {}
+        taken: set[int] = set()
+        for flat in np.argsort(d, axis=None, kind="stable"):
+            i, j = divmod(int(flat), len(live))
+            if not np.isfinite(d[i, j]):
+                break
+            if lost[i].id in out or live[j].id in taken:
+                continue
+            out[lost[i].id] = live[j].id
+            taken.add(live[j].id)
+            log.debug("t%d re-acquired onto t%d (hands met)", lost[i].id, live[j].id)
+        return out
 
     # ------------------------------------------------------------------ 4: labelling
 
@@ -589,7 +685,11 @@ class MultiTargetTracker:
                 tr.typed_frames += 1
                 if tr.typed_frames < lcfg.min_frames:
                     continue
-                if tr.type_llr >= lcfg.decide_llr and not self._near_head(tr):
+                if (
+                    tr.type_llr >= lcfg.decide_llr
+                    and not self._near_head(tr)
+                    and self._has_body(tr)
+                ):
                     tr.is_hand = False
                     self._new_person(tr, t_ns)
                 elif tr.type_llr <= -lcfg.decide_llr:
@@ -598,6 +698,23 @@ class MultiTargetTracker:
         self._update_facing()
         self._decide_sides(t_ns)
         self._revise_sides(t_ns)
+
+    def _has_body(self, tr: _Track) -> bool:
+        """Whether silhouettes show a body under a would-be head (:func:`lab.body_support`;
+        True without observations or when too few cameras see it). A tracker that fails once
+        never becomes a head: a ghost between two people is covered by one of them in some
+        frames, a real head's column is deep inside the silhouettes in every view."""
+        need = self.cfg.labelling.body_support_min
+        if tr.bodiless:
+            return False
+        if need <= 0 or not self._observations:
+            return True
+        support = lab.body_support(tr.mean_m, self.rig, self._observations, self.cfg.labelling)
+        if support is not None and support < need:
+            log.debug("t%d looks like a head but has no body under it (%.2f)", tr.id, support)
+            tr.bodiless = True
+            return False
+        return True
 
     def _near_head(self, tr: _Track) -> bool:
         for p in self._persons.values():
@@ -742,6 +859,7 @@ class MultiTargetTracker:
         pairs: dict[int, int],
         drifted: set[int],
         reacquired: dict[int, int],
+        merged: dict[int, int],
     ) -> list[Transition]:
         lc = self.cfg.lifecycle
         plan: dict[int, Phase] = {}
@@ -753,7 +871,7 @@ class MultiTargetTracker:
                 separated=tr.apart_frames >= lc.separate_frames
                 and tr.split_gain_m >= lc.separate_gain_m,
                 labelled=tr.labelled,
-                reacquired=tr.id in reacquired,
+                reacquired=tr.id in reacquired or tr.id in merged,
                 lost_for_s=(t_ns - tr.lost_since_ns) * 1e-9
                 if tr.lost_since_ns is not None
                 else 0.0,
@@ -813,7 +931,11 @@ class MultiTargetTracker:
                 tr.mean_m = tr.last_good_m.copy()
                 tr.misses = 0
             elif old is Phase.LOST and new is Phase.UNLABELLED:
-                self._reinit(tr, self._pending[reacquired[tid]].position_m, np.zeros(3))
+                if tid in merged:
+                    met = self._tracks[merged[tid]]
+                    self._reinit(tr, met.mean_m, met.vel_mps)
+                else:
+                    self._reinit(tr, self._pending[reacquired[tid]].position_m, np.zeros(3))
                 tr.lost_since_ns = None
                 tr.misses = 0
                 tr.since_miss = 1 << 30
@@ -874,6 +996,8 @@ class MultiTargetTracker:
         tr.mean_m = np.array(position_m, dtype=np.float64)
         tr.last_good_m = tr.mean_m.copy()
         tr.vel_mps = np.array(velocity_mps, dtype=np.float64)
+        tr.last_good_ns = self._last_t_ns or 0
+        tr.last_good_vel_mps = tr.vel_mps.copy()
         tr.cov_m2 = np.eye(3) * fcfg.init_spread_m**2
 
     def _remove(self, tid: int) -> None:

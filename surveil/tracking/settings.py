@@ -127,7 +127,7 @@ class LifecycleConfig:
     )
     pair_seed_gate_m: float = setting(
         0.6,
-        "a new candidate confirmed this close to a combined pair (and at least "
+        "a new candidate that appeared this close to a combined pair (and is at least "
         "separate_distance_m from it) is one of its targets leaving: the pair separates onto "
         "it instead of a new tracker starting there, m",
         min=0.0,
@@ -172,6 +172,24 @@ class LifecycleConfig:
         0.5, "the re-acquisition gate grows by this per second lost, m/s", min=0.0
     )
     reacquire_max_m: float = setting(0.8, "the re-acquisition gate never exceeds this, m", min=0.0)
+    merge_lost_s: float = setting(
+        0.6,
+        "a hand of a person lost at most this long is re-acquired onto another person's hand "
+        "(or its own person's other hand) that reaches its coasted position: the two hands' "
+        "blobs merged as they met, so its candidate vanished; 0 = off, s",
+        min=0.0,
+    )
+    merge_coast_s: float = setting(
+        0.3,
+        "a lost hand's position is extrapolated from its last supported one with its velocity "
+        "there for at most this long, s",
+        min=0.0,
+    )
+    merge_reach_m: float = setting(
+        0.6,
+        "... and only onto a hand this close to its last supported position, m",
+        min=0.0,
+    )
     retire_s: float = setting(
         3.0, "a labelled tracker lost for this long is retired (removed), s", min=0.0
     )
@@ -228,6 +246,20 @@ class LabellingConfig:
         1.5, "smoothed log-odds needed to type a target as head (>= +) or hand (<= -)", min=0.0
     )
     min_frames: int = setting(3, "frame sets a tracker is observed before it is typed", min=1)
+    body_heights: tuple[float, ...] = setting(
+        (0.25, 0.5, 0.75),
+        "a new head needs a body: points under it at these fractions of its height",
+    )
+    body_tolerance_px: float = setting(
+        4.0, "a body point this close to a silhouette counts as inside it, px", min=0.0
+    )
+    body_support_min: float = setting(
+        1.0,
+        "fraction of the cameras seeing the column under a new head that must show it inside "
+        "a silhouette (0 = no check)",
+        min=0.0,
+        max=1.0,
+    )
     arm_reach_m: float = setting(
         0.95, "a hand belongs to a head at most this far away (3-D), m", min=0.0
     )

@@ -68,3 +68,68 @@ def test_angle_rule_keeps_or_swaps():
     # 60 degrees off is still "the same side"
     tilted = lab.angle_rule(before, np.zeros(3), np.array([0.1, 0.17, 0]))
     assert tilted[0] == (0, 1)
+
+
+def _observations_of_a_person(rig, centre_xy, *, scale: int = 1):
+    """Silhouettes (at 1/scale resolution) of one person, a 0.2 m radius column 1.8 m high."""
+    import cv2
+
+    from surveil.datatypes import BlobSet, CameraObservation, Silhouettes
+
+    ang = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+    z = np.linspace(0.0, 1.8, 19)
+    body = np.array(
+        [
+            [centre_xy[0] + 0.2 * np.cos(a), centre_xy[1] + 0.2 * np.sin(a), h]
+            for a in ang
+            for h in z
+        ]
+    )
+    out = {}
+    for cam in rig.cameras:
+        h, w = cam.height // scale, cam.width // scale
+        mask = np.zeros((h, w), np.uint8)
+        px, depth = cam.project(body)
+        ok = cam.in_image(px, depth)
+        hull = cv2.convexHull((px[ok] / scale).astype(np.int32))
+        cv2.fillConvexPoly(mask, hull, 1)
+        dist = cv2.distanceTransform((1 - mask).astype(np.uint8), cv2.DIST_L2, 3)
+        sil = Silhouettes(mask.astype(np.int32), np.zeros(1), np.ones(1), dist.astype(np.float32))
+        blobs = BlobSet(
+            np.zeros((0, 2)),
+            np.zeros(0, np.int64),
+            np.zeros((0, 4), np.int32),
+            np.zeros(0, np.int32),
+            np.zeros(0),
+            np.zeros((h, w), np.int32),
+        )
+        out[cam.name] = CameraObservation(cam.name, sil, np.zeros((h, w), bool), blobs)
+    return out
+
+
+@pytest.mark.parametrize("scale", [1, 2])
+def test_a_head_has_a_body_under_it_and_a_ghost_does_not(scale):
+    from surveil.camera import Rig, look_at
+
+    corners = [(0.0, 0.0), (5.0, 0.0), (5.0, 4.0), (0.0, 4.0)]
+    rig = Rig(
+        tuple(
+            look_at(
+                f"cam{i}",
+                np.array([x, y, 2.5]),
+                np.array([2.5, 2.0, 1.0]),
+                width=320,
+                height=240,
+                hfov_deg=80,
+            )
+            for i, (x, y) in enumerate(corners)
+        )
+    )
+    obs = _observations_of_a_person(rig, (2.0, 2.0), scale=scale)
+    cfg = LabellingConfig()
+    assert lab.body_support(np.array([2.0, 2.0, 1.75]), rig, obs, cfg) == 1.0
+    # a ghost 60 cm beside the person at head height: some camera sees floor under it
+    assert lab.body_support(np.array([2.6, 2.0, 1.5]), rig, obs, cfg) < cfg.body_support_min
+    # too few cameras: no verdict
+    one = {"cam0": obs["cam0"]}
+    assert lab.body_support(np.array([2.0, 2.0, 1.75]), rig, one, cfg) is None

@@ -453,6 +453,45 @@ def test_a_hand_that_vanishes_beside_the_other_hand_joins_it_at_once(rig, rng):
     assert without is None or without >= with_rule
 
 
+def test_a_hand_lost_just_before_it_meets_the_other_is_reacquired_onto_it(rig, rng):
+    """Hands closing at ~1 m/s: the left hand's candidate vanishes 28 cm before contact (its
+    blob merged with the other's) and its tracker is lost. When the right hand reaches the
+    left one's coasted position, the lost tracker is re-acquired onto it, keeping its label,
+    and the two combine; they part when both candidates are back. With merge_lost_s = 0 the
+    lost hand never joins."""
+    p = body((2.5, 1.2), 90.0)
+    meet = p["head"] + 0.35 * p["fwd"] - [0, 0, 0.5]
+    path = [0.0] * 35 + list(np.linspace(0, 1, 9)[1:]) + [1.0] * 6
+    frames = []
+    for u in path:
+        lh = p["left_hand"] + u * (meet + 0.04 * p["left"] - p["left_hand"])
+        rh = p["right_hand"] + u * (meet - 0.04 * p["left"] - p["right_hand"])
+        frames.append([p["head"], rh] if u >= 0.5 else [p["head"], lh, rh])
+    for k in range(1, 9):  # they part again, both seen
+        off = 0.04 + 0.05 * k
+        frames.append([p["head"], meet + off * p["left"], meet - off * p["left"]])
+
+    def left_hand_story(merge_lost_s: float) -> tuple[list, list]:
+        lc = LifecycleConfig(retire_unclaimed_s=0.0, merge_lost_s=merge_lost_s)
+        out = run(MultiTargetTracker(TrackingConfig(lifecycle=lc), rig, seed=6), frames, rng)
+        ids = {s.label: s.target_id for s in out[34].targets}
+        left = ids["p1/left_hand"]
+        mine = [t for f in out[35:] for t in f.transitions if t.target_id == left]
+        return [(t.old, t.new) for t in mine], [t.label for t in mine]
+
+    story, labels = left_hand_story(0.6)
+    assert story[:4] == [
+        (Phase.NORMAL, Phase.LOST),
+        (Phase.LOST, Phase.UNLABELLED),
+        (Phase.UNLABELLED, Phase.COMBINED),
+        (Phase.COMBINED, Phase.UNLABELLED),
+    ], story
+    assert set(labels) == {"p1/left_hand"}
+    without, _ = left_hand_story(0.0)
+    assert (Phase.UNLABELLED, Phase.COMBINED) not in without
+    assert (Phase.NORMAL, Phase.COMBINED) not in without
+
+
 def test_a_candidate_that_stays_beside_joined_hands_does_not_part_them(rig, rng):
     """A stray candidate that appears 28 cm from joined hands and stays (a bare forearm, a
     mismatched blob pair) is a second mode, but the modes do not move apart: the pair stays
@@ -467,17 +506,21 @@ def test_a_candidate_that_stays_beside_joined_hands_does_not_part_them(rig, rng)
     assert len(splits) == 2 and min(splits) > max(joined)
 
 
-def test_a_hand_that_leaves_a_pair_unseen_parts_it_instead_of_starting_a_tracker(rig, rng):
+@pytest.mark.parametrize("speed_m_per_frame", [0.01, 0.08])
+def test_a_hand_that_leaves_a_pair_unseen_parts_it_instead_of_starting_a_tracker(
+    rig, rng, speed_m_per_frame
+):
     """The left hand leaves the joined hands while hidden for a frame and reappears 50 cm
     away, beyond the pair's mode gate: its candidate is the pair's second mode, so the pair
-    separates onto it (angle rule) and no new tracker starts."""
+    separates onto it (angle rule) and no new tracker starts. Also when it goes on moving
+    away fast (1.2 m/s: 66 cm away when its seed is confirmed, beyond pair_seed_gate_m)."""
     frames, _, p = clap_frames(cross=False)
     rest = 35 + 8 + 5  # first frame after the hands rested together
     meet = frames[rest - 1][1]
     frames = frames[:rest]
     frames.append([p["head"], meet])  # the left hand hidden
     for k in range(8):
-        left = meet + (0.5 + 0.01 * min(k, 4)) * p["left"]
+        left = meet + (0.5 + speed_m_per_frame * min(k, 4)) * p["left"]
         frames.append([p["head"], meet, left])
     out = run(MultiTargetTracker(LONE, rig, seed=8), frames, rng)
     ids = {s.label: s.target_id for s in out[34].targets}
@@ -486,7 +529,8 @@ def test_a_hand_that_leaves_a_pair_unseen_parts_it_instead_of_starting_a_tracker
     assert not starts
     assert {t.target_id for t in splits} == {ids["p1/left_hand"], ids["p1/right_hand"]}
     final = by_label(out[-1])
-    assert np.linalg.norm(final["p1/left_hand"] - (meet + 0.54 * p["left"])) < 0.05
+    gone = 0.5 + 4 * speed_m_per_frame
+    assert np.linalg.norm(final["p1/left_hand"] - (meet + gone * p["left"])) < 0.05
     assert np.linalg.norm(final["p1/right_hand"] - meet) < 0.05
 
 
