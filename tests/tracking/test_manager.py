@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from surveil.camera import Rig, look_at
 from surveil.datatypes import (
     BlobSet,
     CameraObservation,
@@ -27,24 +26,6 @@ DT_NS = 66_666_667  # 15 fps
 
 # these tests follow lone points (no person around them): never retire them as unclaimed
 LONE = TrackingConfig(lifecycle=LifecycleConfig(retire_unclaimed_s=0.0))
-
-
-@pytest.fixture(scope="module")
-def rig() -> Rig:
-    corners = [(0.0, 0.0), (5.0, 0.0), (5.0, 4.0), (0.0, 4.0)]
-    return Rig(
-        tuple(
-            look_at(
-                f"cam{i}",
-                np.array([x, y, 2.5]),
-                np.array([2.5, 2.0, 1.0]),
-                width=320,
-                height=240,
-                hfov_deg=80,
-            )
-            for i, (x, y) in enumerate(corners)
-        )
-    )
 
 
 def body(centre_xy, facing_deg: float) -> dict[str, np.ndarray]:
