@@ -79,7 +79,7 @@ class _Track:
     typed_frames: int = 0
     speed_ema_mps: float = 0.0
     partner: int | None = None
-    bodiless: bool = False  # failed the body check once: never a head
+    body_fails: int = 0  # frame sets in which it failed the body check (a head candidate)
     before_vec_m: np.ndarray | None = None
     apart_frames: int = 0
     split_m: np.ndarray | None = None  # (2, 3) the two modes of a combined pair this frame
@@ -701,18 +701,20 @@ class MultiTargetTracker:
 
     def _has_body(self, tr: _Track) -> bool:
         """Whether silhouettes show a body under a would-be head (:func:`lab.body_support`;
-        True without observations or when too few cameras see it). A tracker that fails once
-        never becomes a head: a ghost between two people is covered by one of them in some
-        frames, a real head's column is deep inside the silhouettes in every view."""
-        need = self.cfg.labelling.body_support_min
-        if tr.bodiless:
+        True without observations or when too few cameras see it). A tracker that fails
+        ``body_fail_frames`` times never becomes a head: a ghost between two people is covered
+        by one of them in some frames, a real head's column is deep inside the silhouettes in
+        every view but for a glitch."""
+        lcfg = self.cfg.labelling
+        need = lcfg.body_support_min
+        if tr.body_fails >= lcfg.body_fail_frames:
             return False
         if need <= 0 or not self._observations:
             return True
         support = lab.body_support(tr.mean_m, self.rig, self._observations, self.cfg.labelling)
         if support is not None and support < need:
             log.debug("t%d looks like a head but has no body under it (%.2f)", tr.id, support)
-            tr.bodiless = True
+            tr.body_fails += 1
             return False
         return True
 

@@ -247,11 +247,15 @@ class LabellingConfig:
     )
     min_frames: int = setting(3, "frame sets a tracker is observed before it is typed", min=1)
     body_heights: tuple[float, ...] = setting(
-        (0.25, 0.5, 0.75),
-        "a new head needs a body: points under it at these fractions of its height",
+        (0.5, 0.75),
+        "a new head needs a body: points under it at these fractions of its height (hips and "
+        "chest; the knees fall between the legs or on dark trousers)",
     )
     body_tolerance_px: float = setting(
         4.0, "a body point this close to a silhouette counts as inside it, px", min=0.0
+    )
+    body_fail_frames: int = setting(
+        3, "a would-be head that fails the body check this often is never a head", min=1
     )
     body_support_min: float = setting(
         1.0,
