@@ -158,7 +158,6 @@ class MultiTargetTracker:
         self._next_person = 1
         self._last_t_ns: int | None = None
         self._shares: dict[int, np.ndarray] = {}  # tracker id -> exclusion share per candidate
-        self._observations: Mapping[str, CameraObservation] = {}  # this frame set's
 
     # ------------------------------------------------------------------ public step
 
@@ -215,8 +214,7 @@ class MultiTargetTracker:
         merged = self._merge_lost(t_ns, reacquired, pairs, seeds)
         parted = self._split_on_seeds(seeds, set(reacquired.values()))
         rel_v = self._candidate_rel_v(candidates, observations)
-        self._observations = observations or {}
-        self._label(pts, rel_v, t_ns)
+        self._label(pts, rel_v, t_ns, observations or {})
         transitions = self._advance_phases(t_ns, pairs, drifted, reacquired, merged)
         transitions += self._initialise(seeds, set(reacquired.values()) | parted, t_ns)
         return self._frame(t_ns, transitions)
@@ -535,12 +533,18 @@ class MultiTargetTracker:
         sp = np.array([seeds[i].position_m for i in ok])
         d = np.linalg.norm(last[:, None] - sp[None], axis=2)
         lost_s = np.array([(t_ns - (tr.lost_since_ns or t_ns)) * 1e-9 for tr in lost])
-        gate = np.minimum(
-            lc.reacquire_gate_m + lc.reacquire_speed_mps * lost_s, lc.reacquire_max_m
-        )
+        gate = self._reacquire_gate_m(lost_s)
         cost = np.where(d <= gate[:, None], d, 1e6)
         rows, cols = linear_sum_assignment(cost)
         return {lost[r].id: ok[c] for r, c in zip(rows, cols, strict=True) if cost[r, c] < 1e6}
+
+    def _reacquire_gate_m(self, unseen_s: float | np.ndarray) -> float | np.ndarray:
+        """How far from its last position a lost target may be re-acquired after ``unseen_s``:
+        ``reacquire_gate_m`` growing by ``reacquire_speed_mps``, at most ``reacquire_max_m``."""
+        lc = self.cfg.lifecycle
+        return np.minimum(
+            lc.reacquire_gate_m + lc.reacquire_speed_mps * unseen_s, lc.reacquire_max_m
+        )
 
     def _merge_lost(
         self,
@@ -594,24 +598,17 @@ class MultiTargetTracker:
                 tr
                 for tr in lost
                 if np.linalg.norm(sp - tr.last_good_m, axis=1).min()
-                > min(
-                    lc.reacquire_gate_m + lc.reacquire_speed_mps * (t_ns - tr.last_good_ns) * 1e-9,
-                    lc.reacquire_max_m,
-                )
+                > self._reacquire_gate_m((t_ns - tr.last_good_ns) * 1e-9)
             ]
         if not lost or not live:
             return {}
+        last = np.array([tr.last_good_m for tr in lost])
+        live_m = np.array([tr.mean_m for tr in live])
         coast_s = np.minimum([(t_ns - tr.last_good_ns) * 1e-9 for tr in lost], lc.merge_coast_s)
-        coasted = np.array([tr.last_good_m for tr in lost]) + coast_s[:, None] * np.array(
-            [tr.last_good_vel_mps for tr in lost]
-        )
-        d = np.linalg.norm(coasted[:, None] - np.array([tr.mean_m for tr in live])[None], axis=2)
+        coasted = last + coast_s[:, None] * np.array([tr.last_good_vel_mps for tr in lost])
+        d = np.linalg.norm(coasted[:, None] - live_m[None], axis=2)
         gate = lc.hand_merge_distance_m + lc.reacquire_speed_mps * coast_s
-        reach = np.linalg.norm(
-            np.array([tr.last_good_m for tr in lost])[:, None]
-            - np.array([tr.mean_m for tr in live])[None],
-            axis=2,
-        )
+        reach = np.linalg.norm(last[:, None] - live_m[None], axis=2)
         d = np.where((d < gate[:, None]) & (reach <= lc.merge_reach_m), d, np.inf)
         out: dict[int, int] = {}
         taken: set[int] = set()
@@ -657,7 +654,13 @@ class MultiTargetTracker:
         out[has] = total[has] / count[has]
         return out
 
-    def _label(self, pts: np.ndarray, cand_rel_v: np.ndarray, t_ns: int) -> None:
+    def _label(
+        self,
+        pts: np.ndarray,
+        cand_rel_v: np.ndarray,
+        t_ns: int,
+        observations: Mapping[str, CameraObservation],
+    ) -> None:
         lcfg = self.cfg.labelling
         act = [tr for tr in self._tracks.values() if tr.phase in ACTIVE]
         if not act:
@@ -688,7 +691,7 @@ class MultiTargetTracker:
                 if (
                     tr.type_llr >= lcfg.decide_llr
                     and not self._near_head(tr)
-                    and self._has_body(tr)
+                    and self._has_body(tr, observations)
                 ):
                     tr.is_hand = False
                     self._new_person(tr, t_ns)
@@ -699,7 +702,7 @@ class MultiTargetTracker:
         self._decide_sides(t_ns)
         self._revise_sides(t_ns)
 
-    def _has_body(self, tr: _Track) -> bool:
+    def _has_body(self, tr: _Track, observations: Mapping[str, CameraObservation]) -> bool:
         """Whether silhouettes show a body under a would-be head (:func:`lab.body_support`;
         True without observations or when too few cameras see it). A tracker that fails
         ``body_fail_frames`` times never becomes a head: a ghost between two people is covered
@@ -709,9 +712,9 @@ class MultiTargetTracker:
         need = lcfg.body_support_min
         if tr.body_fails >= lcfg.body_fail_frames:
             return False
-        if need <= 0 or not self._observations:
+        if need <= 0 or not observations:
             return True
-        support = lab.body_support(tr.mean_m, self.rig, self._observations, self.cfg.labelling)
+        support = lab.body_support(tr.mean_m, self.rig, observations, lcfg)
         if support is not None and support < need:
             log.debug("t%d looks like a head but has no body under it (%.2f)", tr.id, support)
             tr.body_fails += 1

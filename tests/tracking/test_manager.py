@@ -403,19 +403,28 @@ def test_a_target_whose_candidates_vanish_is_not_pulled_onto_its_neighbour(rig, 
     assert (np.linalg.norm(snap.mean_m - head) < 0.05) != exclusion
 
 
+def meeting_hands(half_gap_m: float, rest: int, hidden_from: float):
+    """A person's two hands move in 8 frame sets from rest to meet in front (``half_gap_m``
+    either side of the meeting point) after 35 still frame sets, then stay ``rest`` frame
+    sets; the left hand's candidate is missing from path fraction ``hidden_from`` on.
+    Returns (frames, path fractions, body, meeting point)."""
+    p = body((2.5, 1.2), 90.0)
+    meet = p["head"] + 0.35 * p["fwd"] - [0, 0, 0.5]
+    path = [0.0] * 35 + list(np.linspace(0, 1, 9)[1:]) + [1.0] * rest
+    frames = []
+    for u in path:
+        lh = p["left_hand"] + u * (meet + half_gap_m * p["left"] - p["left_hand"])
+        rh = p["right_hand"] + u * (meet - half_gap_m * p["left"] - p["right_hand"])
+        frames.append([p["head"], rh] if u >= hidden_from else [p["head"], lh, rh])
+    return frames, path, p, meet
+
+
 def test_a_hand_that_vanishes_beside_the_other_hand_joins_it_at_once(rig, rng):
     """Meeting hands 15 cm apart whose blobs merge leave one candidate: with
     hand_merge_distance_m the hand that lost it combines with the other within the frames a
     loss takes to declare; without, it joins only once its cloud drifts within the combine
     distance (with the stop-and-go motion component that can happen as early)."""
-    p = body((2.5, 1.2), 90.0)
-    meet = p["head"] + 0.35 * p["fwd"] - [0, 0, 0.5]
-    path = [0.0] * 35 + list(np.linspace(0, 1, 9)[1:]) + [1.0] * 8
-    frames = []
-    for u in path:
-        lh = p["left_hand"] + u * (meet + 0.075 * p["left"] - p["left_hand"])
-        rh = p["right_hand"] + u * (meet - 0.075 * p["left"] - p["right_hand"])
-        frames.append([p["head"], rh] if u == 1.0 else [p["head"], lh, rh])
+    frames, path, _, _ = meeting_hands(0.075, rest=8, hidden_from=1.0)
     vanish = path.index(1.0)
 
     def join_frame(merge_m: float) -> int | None:
@@ -440,14 +449,7 @@ def test_a_hand_lost_just_before_it_meets_the_other_is_reacquired_onto_it(rig, r
     left one's coasted position, the lost tracker is re-acquired onto it, keeping its label,
     and the two combine; they part when both candidates are back. With merge_lost_s = 0 the
     lost hand never joins."""
-    p = body((2.5, 1.2), 90.0)
-    meet = p["head"] + 0.35 * p["fwd"] - [0, 0, 0.5]
-    path = [0.0] * 35 + list(np.linspace(0, 1, 9)[1:]) + [1.0] * 6
-    frames = []
-    for u in path:
-        lh = p["left_hand"] + u * (meet + 0.04 * p["left"] - p["left_hand"])
-        rh = p["right_hand"] + u * (meet - 0.04 * p["left"] - p["right_hand"])
-        frames.append([p["head"], rh] if u >= 0.5 else [p["head"], lh, rh])
+    frames, _, p, meet = meeting_hands(0.04, rest=6, hidden_from=0.5)
     for k in range(1, 9):  # they part again, both seen
         off = 0.04 + 0.05 * k
         frames.append([p["head"], meet + off * p["left"], meet - off * p["left"]])
