@@ -36,6 +36,21 @@ def test_moving_rectangle_gives_one_silhouette_in_place(rng):
     assert sil.labels.dtype == np.int32 and sil.dist_outside_px.dtype == np.float32
 
 
+def test_thin_arm_held_out_stays_in_the_silhouette(rng):
+    # a 3-px-wide arm (about 1.5 px in the half-size mask) reaching out of a body must stay
+    # foreground: a 3-px opening erased such arms, and with them hands held against them
+    model = BackgroundModel(BackgroundConfig(learning_frames=20, min_person_area_px=100), (H, W))
+    _, frame = _scene(rng)
+    _learn(model, frame)
+    img = frame()
+    img[30:100, 20:44] = (20, 200, 40)  # body
+    img[50:53, 44:70] = (20, 200, 40)  # arm
+    img[49:54, 70:74] = (60, 110, 200)  # hand
+    sil = model.step(img)
+    assert sil.n == 1
+    assert sil.labels[51, 60] == 1 and sil.labels[51, 72] == 1
+
+
 def test_shadow_is_background(rng):
     model = BackgroundModel(BackgroundConfig(learning_frames=20), (H, W))
     base, frame = _scene(rng)
