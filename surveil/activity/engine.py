@@ -630,7 +630,14 @@ class ActivityEngine:
                 continue
             used.append(est)
             if not carry_satisfies(req, carry_state(est, th.min_confidence)):
-                log.debug("%s: %s did not match", rule.rule_id, st.label)
+                log.debug(
+                    "%s: %s did not match (carry before %s, after %s%s)",
+                    rule.rule_id,
+                    st.label,
+                    _describe(st.before, th.min_confidence),
+                    _describe(after, th.min_confidence),
+                    ", timed out" if timed_out else "",
+                )
                 return None
         return ActivityEvent(
             activity=rule.name,

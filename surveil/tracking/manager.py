@@ -567,7 +567,10 @@ class MultiTargetTracker:
         pair. The live hand must also be within ``merge_reach_m`` of the lost hand's last
         supported position (a hand lost at 2 m/s would coast 60 cm in 0.3 s; hands lost
         0.2-0.4 s before they meet were at most 50 cm from the meeting point on the bundled
-        scenes). Nearest first, one lost hand per live hand. A lost hand with a new candidate
+        scenes), and the lost hand must have been approaching it at ``merge_closing_mps``
+        or faster (relative velocity along the line joining them): hands about to meet
+        close at 1-2 m/s, while a hand lost beside a resting one (pick_place: its left hand
+        at the table) is not moving towards it. Nearest first, one lost hand per live hand. A lost hand with a new candidate
         (a seed, confirmed or not) within its re-acquisition gate is not merged: its target
         is still seen on its own, and a tracker that drifted off its hand onto the other
         must not make the two "meet"."""
@@ -608,8 +611,24 @@ class MultiTargetTracker:
         coasted = last + coast_s[:, None] * np.array([tr.last_good_vel_mps for tr in lost])
         d = np.linalg.norm(coasted[:, None] - live_m[None], axis=2)
         gate = lc.hand_merge_distance_m + lc.reacquire_speed_mps * coast_s
-        reach = np.linalg.norm(last[:, None] - live_m[None], axis=2)
-        d = np.where((d < gate[:, None]) & (reach <= lc.merge_reach_m), d, np.inf)
+        towards = live_m[None] - last[:, None]
+        reach = np.linalg.norm(towards, axis=2)
+        rel_vel = (
+            np.array([tr.last_good_vel_mps for tr in lost])[:, None]
+            - np.array([tr.vel_mps for tr in live])[None]
+        )
+        closing = np.einsum("ijk,ijk->ij", rel_vel, towards) / np.maximum(reach, 1e-9)
+        ok = (d < gate[:, None]) & (reach <= lc.merge_reach_m) & (closing >= lc.merge_closing_mps)
+        if log.isEnabledFor(logging.DEBUG):
+            for i, j in zip(*np.nonzero(d < gate[:, None]), strict=True):
+                log.debug(
+                    "merge t%d->t%d: reach %.2f m, closing %.2f m/s",
+                    lost[i].id,
+                    live[j].id,
+                    reach[i, j],
+                    closing[i, j],
+                )
+        d = np.where(ok, d, np.inf)
         out: dict[int, int] = {}
         taken: set[int] = set()
         for flat in np.argsort(d, axis=None, kind="stable"):

@@ -190,6 +190,12 @@ class LifecycleConfig:
         "... and only onto a hand this close to its last supported position, m",
         min=0.0,
     )
+    merge_closing_mps: float = setting(
+        0.3,
+        "... that it was approaching at least this fast when last supported (its velocity "
+        "relative to the other hand, along the line joining them), m/s",
+        min=-1e9,
+    )
     retire_s: float = setting(
         3.0, "a labelled tracker lost for this long is retired (removed), s", min=0.0
     )
