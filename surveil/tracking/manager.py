@@ -570,10 +570,10 @@ class MultiTargetTracker:
         scenes), and the lost hand must have been approaching it at ``merge_closing_mps``
         or faster (relative velocity along the line joining them): hands about to meet
         close at 1-2 m/s, while a hand lost beside a resting one (pick_place: its left hand
-        at the table) is not moving towards it. Nearest first, one lost hand per live hand. A lost hand with a new candidate
-        (a seed, confirmed or not) within its re-acquisition gate is not merged: its target
-        is still seen on its own, and a tracker that drifted off its hand onto the other
-        must not make the two "meet"."""
+        at the table) is not moving towards it. Nearest first, one lost hand per live hand.
+        A lost hand with a new candidate (a seed, confirmed or not) within its
+        re-acquisition gate is not merged: its target is still seen on its own, and a
+        tracker that drifted off its hand onto the other must not make the two "meet"."""
         lc = self.cfg.lifecycle
         if lc.merge_lost_s <= 0:
             return {}
