@@ -475,6 +475,33 @@ def test_a_hand_lost_just_before_it_meets_the_other_is_reacquired_onto_it(rig, r
     assert (Phase.NORMAL, Phase.COMBINED) not in without
 
 
+def test_a_resting_hand_lost_beside_the_other_is_not_merged_onto_it(rig, rng):
+    """The right hand has come to rest 25 cm from the resting left hand, and then the left
+    hand's candidate vanishes (pick_place: the left hand beside the table, the right picking
+    the box). Neither is moving towards the other, so the lost hand is not re-acquired onto
+    the right hand; with the closing-speed guard off it is, and the two combine although
+    they never met."""
+    p = body((2.5, 1.2), 90.0)
+    target = p["left_hand"] - 0.25 * p["left"]
+    frames = [[p["head"], p["left_hand"], p["right_hand"]]] * 35
+    for u in np.linspace(0, 1, 9)[1:]:
+        frames.append(
+            [p["head"], p["left_hand"], p["right_hand"] + u * (target - p["right_hand"])]
+        )
+    frames += [[p["head"], p["left_hand"], target]] * 6 + [[p["head"], target]] * 8
+
+    def left_story(closing_mps: float) -> list:
+        lc = LifecycleConfig(retire_unclaimed_s=0.0, merge_closing_mps=closing_mps)
+        out = run(MultiTargetTracker(TrackingConfig(lifecycle=lc), rig, seed=6), frames, rng)
+        left = {s.label: s.target_id for s in out[34].targets}["p1/left_hand"]
+        return [(t.old, t.new) for f in out[35:] for t in f.transitions if t.target_id == left]
+
+    guarded, unguarded = left_story(0.3), left_story(-1e9)
+    assert (Phase.NORMAL, Phase.LOST) in guarded
+    assert not any(new is Phase.COMBINED for _, new in guarded), guarded
+    assert any(new is Phase.COMBINED for _, new in unguarded), unguarded
+
+
 def test_a_candidate_that_stays_beside_joined_hands_does_not_part_them(rig, rng):
     """A stray candidate that appears 28 cm from joined hands and stays (a bare forearm, a
     mismatched blob pair) is a second mode, but the modes do not move apart: the pair stays
