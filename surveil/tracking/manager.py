@@ -112,7 +112,8 @@ class _Pending:
     position_m: np.ndarray
     count: int
     velocity_mps: np.ndarray
-    first_m: np.ndarray  # where the seed first appeared
+    # combined tracker id -> the seed's distance from it when first seen together
+    pair_first_m: dict[int, float] = field(default_factory=dict)
 
 
 class MultiTargetTracker:
@@ -456,6 +457,7 @@ class MultiTargetTracker:
         for k in sorted(free.tolist(), key=lambda k: (-prior[k], k)):
             if all(np.linalg.norm(pts[k] - pts[j]) > lc.explained_radius_m for j in kept):
                 kept.append(k)
+        combined = [tr for tr in self._tracks.values() if tr.phase is Phase.COMBINED]
         seeds: list[_Pending] = []
         taken_prev: set[int] = set()
         for k in kept:
@@ -468,9 +470,12 @@ class MultiTargetTracker:
                 taken_prev.add(best)
                 prev = self._pending[best]
                 vel = (pts[k] - prev.position_m) / dt_s if dt_s > 0 else np.zeros(3)
-                seeds.append(_Pending(pts[k].copy(), prev.count + 1, vel, prev.first_m))
+                seed = _Pending(pts[k].copy(), prev.count + 1, vel, dict(prev.pair_first_m))
             else:
-                seeds.append(_Pending(pts[k].copy(), 1, np.zeros(3), pts[k].copy()))
+                seed = _Pending(pts[k].copy(), 1, np.zeros(3))
+            for tr in combined:
+                seed.pair_first_m.setdefault(tr.id, float(np.linalg.norm(pts[k] - tr.mean_m)))
+            seeds.append(seed)
         self._pending = seeds
         return seeds
 
@@ -484,8 +489,11 @@ class MultiTargetTracker:
         labels on the target that stayed. So a confirmed seed within ``pair_seed_gate_m`` of a
         combined pair (and at least ``separate_distance_m`` from it) becomes the pair's second
         mode (the pair's estimate the first), and the pair separates by the angle rule. The
-        gate applies where the seed first appeared: a hand parting at 2.5 m/s is 70 cm away by
-        the time its seed is confirmed."""
+        gate applies to the distance when the seed and the pair were first seen together
+        (``_Pending.pair_first_m``): a hand parting at 2.5 m/s is 70 cm away by the time its
+        seed is confirmed, and after a handshake the pair follows the other hand away in the
+        opposite direction (demo: 54 cm when the seed appeared, 75 cm from where the pair
+        then was two frame sets later)."""
         lc = self.cfg.lifecycle
         out: set[int] = set()
         parted: set[int] = set()
@@ -498,7 +506,7 @@ class MultiTargetTracker:
             if tr.id in parted or tr.apart_frames >= lc.separate_frames:
                 continue
             d = np.array([np.linalg.norm(seeds[i].position_m - tr.mean_m) for i in free])
-            d0 = np.array([np.linalg.norm(seeds[i].first_m - tr.mean_m) for i in free])
+            d0 = np.array([seeds[i].pair_first_m.get(tr.id, np.inf) for i in free])
             k = int(np.argmin(d0))
             if not (d[k] >= lc.separate_distance_m and d0[k] <= lc.pair_seed_gate_m):
                 continue

@@ -516,14 +516,18 @@ def test_a_candidate_that_stays_beside_joined_hands_does_not_part_them(rig, rng)
     assert len(splits) == 2 and min(splits) > max(joined)
 
 
-@pytest.mark.parametrize("speed_m_per_frame", [0.01, 0.08])
+@pytest.mark.parametrize(
+    ("speed_m_per_frame", "pair_m_per_frame"), [(0.01, 0.0), (0.08, 0.0), (0.01, 0.06)]
+)
 def test_a_hand_that_leaves_a_pair_unseen_parts_it_instead_of_starting_a_tracker(
-    rig, rng, speed_m_per_frame
+    rig, rng, speed_m_per_frame, pair_m_per_frame
 ):
     """The left hand leaves the joined hands while hidden for a frame and reappears 50 cm
     away, beyond the pair's mode gate: its candidate is the pair's second mode, so the pair
     separates onto it (angle rule) and no new tracker starts. Also when it goes on moving
-    away fast (1.2 m/s: 66 cm away when its seed is confirmed, beyond pair_seed_gate_m)."""
+    away fast (1.2 m/s: 66 cm away when its seed is confirmed, beyond pair_seed_gate_m), and
+    when the right hand, which the pair follows, withdraws the other way (0.9 m/s: the seed
+    is 62 cm from the pair when confirmed)."""
     frames, _, p = clap_frames(cross=False)
     rest = 35 + 8 + 5  # first frame after the hands rested together
     meet = frames[rest - 1][1]
@@ -531,7 +535,8 @@ def test_a_hand_that_leaves_a_pair_unseen_parts_it_instead_of_starting_a_tracker
     frames.append([p["head"], meet])  # the left hand hidden
     for k in range(8):
         left = meet + (0.5 + speed_m_per_frame * min(k, 4)) * p["left"]
-        frames.append([p["head"], meet, left])
+        right = meet - pair_m_per_frame * min(k + 1, 4) * p["left"]
+        frames.append([p["head"], right, left])
     out = run(MultiTargetTracker(LONE, rig, seed=8), frames, rng)
     ids = {s.label: s.target_id for s in out[34].targets}
     starts = [t for f in out[35:] for t in f.transitions if t.old is Phase.UNINITIALISED]
@@ -541,7 +546,8 @@ def test_a_hand_that_leaves_a_pair_unseen_parts_it_instead_of_starting_a_tracker
     final = by_label(out[-1])
     gone = 0.5 + 4 * speed_m_per_frame
     assert np.linalg.norm(final["p1/left_hand"] - (meet + gone * p["left"])) < 0.05
-    assert np.linalg.norm(final["p1/right_hand"] - meet) < 0.05
+    right = meet - 4 * pair_m_per_frame * p["left"]
+    assert np.linalg.norm(final["p1/right_hand"] - right) < 0.05
 
 
 def test_a_new_tracker_that_meets_a_persons_hand_is_lost_not_combined(rig, rng):
