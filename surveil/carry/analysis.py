@@ -43,7 +43,13 @@ import numpy as np
 
 from surveil.camera import Camera, Rig
 from surveil.carry.fusion import HueWindow, decide_carrying, subtract_distribution
-from surveil.carry.hue import pixel_hue_codes, region_mode_pdf
+from surveil.carry.hue import (
+    HUE_CODE_DEG,
+    hue_histogram,
+    pixel_hue_codes,
+    region_mode_pdf,
+    smooth_circular,
+)
 from surveil.carry.settings import CarryConfig
 from surveil.datatypes import CameraObservation, CarryEstimate, Limb, Phase, TargetSnapshot
 from surveil.validate import readonly, require_shape
@@ -404,6 +410,63 @@ def analyse_hand_view(
     )
 
 
+def dress_view_hist(
+    bgr: np.ndarray,
+    observation: CameraObservation,
+    camera: Camera,
+    centre_m: np.ndarray,
+    radius_m: float,
+    cfg: CarryConfig,
+    exclude_circles: np.ndarray | None = None,
+) -> tuple[np.ndarray, int]:
+    """Hue histogram of a person's dress around a point of their body, in one camera.
+
+    The pixels within ``radius_m`` (projected) of ``centre_m`` that are inside a silhouette,
+    not skin, not within any of ``exclude_circles`` (the hands: an object held in front of
+    the body is not dress) and have a reliable hue (``cfg.min_saturation``,
+    ``cfg.min_value``).
+
+    Parameters
+    ----------
+    bgr : (H, W, 3) uint8
+    observation : CameraObservation
+    camera : Camera
+    centre_m : (3,) float -- world frame, metres
+    radius_m : float
+    cfg : CarryConfig
+    exclude_circles : (K, 3) float, optional -- ``(u, v, r)`` pixel circles to leave out
+
+    Returns
+    -------
+    hist : (B,) float64
+        Counts per hue bin (``cfg.hue_bins``), smoothed with ``cfg.kde_sigma_deg``; not
+        normalised (zeros when nothing is seen).
+    n_px : int
+        Pixels with a hue that went into it.
+    """
+    px, depth = camera.project(np.asarray(centre_m, np.float64).reshape(1, 3))
+    if not camera.in_image(px, depth)[0]:
+        return np.zeros(cfg.hue_bins), 0
+    centre = px[0]
+    radius = camera.K[0, 0] * radius_m / max(float(depth[0]), 1e-9)
+    rows, cols = circle_box(centre, radius, bgr.shape[:2])
+    yy = np.arange(rows.start, rows.stop)[:, None]
+    xx = np.arange(cols.start, cols.stop)[None, :]
+    mask = (xx - centre[0]) ** 2 + (yy - centre[1]) ** 2 <= radius**2
+    mask &= (observation.silhouettes.labels[rows, cols] > 0) & ~observation.skin[rows, cols]
+    for u, v, r in np.zeros((0, 3)) if exclude_circles is None else exclude_circles:
+        mask &= (xx - u) ** 2 + (yy - v) ** 2 > r * r
+    if not mask.any():
+        return np.zeros(cfg.hue_bins), 0
+    codes = pixel_hue_codes(bgr[rows, cols], cfg.min_saturation, cfg.min_value, mask=mask)
+    counts = np.bincount(codes.reshape(-1), minlength=256)[: len(HUE_CODE_DEG)]
+    n_px = int(counts.sum())
+    if n_px == 0:
+        return np.zeros(cfg.hue_bins), 0
+    hist = hue_histogram(HUE_CODE_DEG, cfg.hue_bins, n_total=1, weights=counts)
+    return smooth_circular(hist, cfg.kde_sigma_deg), n_px
+
+
 # ---------------------------------------------------------------------------------------------
 # the stateful analyser
 
@@ -457,10 +520,18 @@ class CarryAnalyser:
         self._cams = rig.as_mapping()
         self._window_ns = int(round(cfg.window_s * 1e9))
         self._hands: dict[int, _HandState] = {}
+        # person -> (dress hue distribution (B,) summing to 1, time of its last update, ns)
+        self._dress: dict[int, tuple[np.ndarray, int]] = {}
 
     def reset(self) -> None:
-        """Forget every hand."""
+        """Forget every hand and every person's dress."""
         self._hands.clear()
+        self._dress.clear()
+
+    def dress(self, person: int) -> np.ndarray | None:
+        """(B,) hue distribution of the person's dress (sums to 1), or None if not seen."""
+        entry = self._dress.get(person)
+        return None if entry is None else entry[0]
 
     def is_frozen(self, target_id: int) -> bool:
         """Whether the hand's window is frozen by an overlap (False for unknown ids)."""
@@ -520,6 +591,8 @@ class CarryAnalyser:
             for j in _unambiguous_views(views, self._frozen_circles(cam, pos, ~active)):
                 self._hands[ids[j]].window.push(t_ns, views[j].rho, views[j].pdf)
         fused = {tid: self._hands[tid].window.fused(t_ns, self._window_ns) for tid in ids}
+        if cfg.subtract_dress:
+            self._update_dress(t_ns, images, observations, targets, pos)
         siblings = _siblings(hands) if cfg.subtract_clothing else {}
         out: dict[int, CarryEstimate] = {}
         for t in hands:
@@ -531,6 +604,9 @@ class CarryAnalyser:
             sib = siblings.get(t.target_id)
             if sib is not None and fused[sib][1] > 0:
                 pdf = subtract_distribution(pdf, fused[sib][0])
+            dress = self.dress(t.person) if cfg.subtract_dress and t.person > 0 else None
+            if dress is not None:
+                pdf = subtract_distribution(pdf, dress)
             est = self._estimate(t, t_ns, pdf, total_rho)
             if not state.frozen:
                 state.last = est
@@ -557,13 +633,70 @@ class CarryAnalyser:
     def _frozen_circles(self, cam: Camera, pos: np.ndarray, frozen: np.ndarray) -> np.ndarray:
         """(K, 3) ``(u, v, r)`` largest circles of the frozen hands that project into ``cam``
         (they are not analysed, but what they hold must not leak into a neighbour)."""
-        if not frozen.any():
+        return self._hand_circles(cam, pos[frozen])
+
+    def _hand_circles(self, cam: Camera, pos: np.ndarray) -> np.ndarray:
+        """(K, 3) ``(u, v, r)`` largest circles of the hands at ``pos`` ((N, 3), world) that
+        project into ``cam``."""
+        if not len(pos):
             return np.zeros((0, 3))
-        px, depth = cam.project(pos[frozen])
+        px, depth = cam.project(pos)
         seen = cam.in_image(px, depth)
         r = cam.K[0, 0] * self.cfg.max_radius_m / np.maximum(depth, 1e-9)
         r = np.clip(r, self.cfg.min_radius_px, self.cfg.max_radius_px)
         return np.column_stack([px, r])[seen]
+
+    def _update_dress(
+        self,
+        t_ns: int,
+        images: Mapping[str, np.ndarray],
+        observations: Mapping[str, CameraObservation],
+        targets: Sequence[TargetSnapshot],
+        hands_m: np.ndarray,
+    ) -> None:
+        """Update each person's dress distribution from the regions below their head.
+
+        Per region (``dress_drops_m`` below the head, radius ``dress_radius_m``) the hued
+        pixels of every camera are pooled into one distribution (summing to 1); the dress is
+        the bin-wise maximum over the regions (shirt and trousers may differ: each must
+        cancel fully), averaged over time with the time constant ``dress_time_s``. The hands'
+        largest circles are left out, so an object held in front of the body is not dress.
+        People who are gone are forgotten."""
+        cfg = self.cfg
+        heads = {
+            t.person: t.mean_m
+            for t in targets
+            if t.limb is Limb.HEAD and t.person > 0 and t.phase is not Phase.LOST
+        }
+        for gone in set(self._dress) - set(heads):
+            del self._dress[gone]
+        if not heads:
+            return
+        views = [
+            (images[name], observations[name], self._cams[name])
+            for name in images
+            if name in observations and name in self._cams
+        ]
+        circles = [self._hand_circles(cam, hands_m) for _, _, cam in views]
+        for person, head_m in heads.items():
+            regions = []
+            for drop in cfg.dress_drops_m:
+                centre = head_m - np.array([0.0, 0.0, drop])
+                total, n_px = np.zeros(cfg.hue_bins), 0
+                for (img, obs, cam), excl in zip(views, circles, strict=True):
+                    hist, n = dress_view_hist(img, obs, cam, centre, cfg.dress_radius_m, cfg, excl)
+                    total += hist
+                    n_px += n
+                if n_px >= cfg.dress_min_pixels:
+                    regions.append(total / n_px)
+            if not regions:
+                continue
+            now = np.max(regions, axis=0)
+            prev = self._dress.get(person)
+            if prev is not None and cfg.dress_time_s > 0:
+                gain = 1.0 - float(np.exp(-(t_ns - prev[1]) * 1e-9 / cfg.dress_time_s))
+                now = prev[0] + gain * (now - prev[0])
+            self._dress[person] = (now, t_ns)
 
     def _estimate(
         self, target: TargetSnapshot, t_ns: int, pdf: np.ndarray, total_rho: float

@@ -84,6 +84,22 @@ class CarryConfig:
     subtract_clothing: bool = setting(
         True, "subtract the same person's other hand's distribution (dress colour)"
     )
+    subtract_dress: bool = setting(
+        True,
+        "subtract the person's dress: the hues around their chest and hips, below the head "
+        "(the other hand rarely sees the same clothing: it hangs by the trousers while the "
+        "hand that gave an object away comes back to the shirt)",
+    )
+    dress_drops_m: tuple[float, ...] = setting(
+        (0.35, 0.75), "dress regions are centred this far below the head (chest, hips), m"
+    )
+    dress_radius_m: float = setting(0.12, "radius of each dress region, m", min=0.01)
+    dress_time_s: float = setting(
+        2.0, "time constant of the dress distribution's running average, s", min=0.0
+    )
+    dress_min_pixels: int = setting(
+        30, "a dress region needs this many pixels with a hue to update the average", min=1
+    )
     unknown_max_height_m: float = setting(
         1.4, "unlabelled (UNKNOWN-limb) targets below this height are analysed as hands, m"
     )
