@@ -111,7 +111,7 @@ def bench_recording(rec_dir: Path, masks: str, cfg: CarryConfig, details: bool =
                         np.isin(cls, PERSON_CLASSES), bg_cfg.min_person_area_px
                     )
             observations[cam] = CameraObservation(
-                cam, sil, skin, extract_blobs(skin, sil, blob_cfg)
+                cam, sil, skin, extract_blobs(skin, sil, blob_cfg, bgr=img)
             )
             images[cam] = img
         if fs.index < bg_cfg.learning_frames or not images or i >= n_f:

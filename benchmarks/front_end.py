@@ -44,7 +44,7 @@ def observe_recording(
             t1 = time.perf_counter()
             skin = skin_model.classify(img)
             t2 = time.perf_counter()
-            blobs = extract_blobs(skin, sil, cfg.blobs, n_people)
+            blobs = extract_blobs(skin, sil, cfg.blobs, n_people, img)
             t3 = time.perf_counter()
             times["background"].append(t1 - t0)
             times["skin"].append(t2 - t1)

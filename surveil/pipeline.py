@@ -153,7 +153,7 @@ class Pipeline:
             skin = self.skin_models[cam].classify(img)
             t2 = time.perf_counter()
             n_people = self.cfg.people_hint or max(silhouettes.n, self._n_heads, 1)
-            blobs = extract_blobs(skin, silhouettes, self.cfg.blobs, n_people)
+            blobs = extract_blobs(skin, silhouettes, self.cfg.blobs, n_people, img)
             t3 = time.perf_counter()
             timings["background"] += 1000 * (t1 - t0)
             timings["skin"] += 1000 * (t2 - t1)

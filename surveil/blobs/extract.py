@@ -44,11 +44,68 @@ def _open(mask: np.ndarray, diameter_px: int) -> np.ndarray:
     return out
 
 
+def split_by_colour(bgr: np.ndarray, mask: np.ndarray, min_delta: float) -> np.ndarray | None:
+    """The pixels of ``mask`` in its two chromaticity clusters, with their common border
+    removed (so they fall apart into separate components), or None if the clusters are
+    closer than ``min_delta``.
+
+    2-means on the normalised chromaticity (r, g) = (R, G) / (R + G + B), started at the mean
+    of the tenth of the pixels with the lowest r and of the tenth with the highest:
+    deterministic, and blind to shading (a lit and a shaded fold of one shirt have the same
+    chromaticity), so it separates a face or hand from the pale shirt it touches (dark skin
+    is redder than beige) rather than the shirt's lit side from its shaded side.
+
+    Parameters
+    ----------
+    bgr : (H, W, 3) uint8
+    mask : (H, W) bool
+    min_delta : float
+        Smallest distance between the cluster centres in (r, g).
+
+    Returns
+    -------
+    (H, W) bool or None
+
+    >>> img = np.zeros((4, 8, 3), np.uint8)
+    >>> img[:, :4] = (40, 58, 92); img[:, 4:] = (150, 180, 200)  # dark skin | beige
+    >>> img[2:, 4:] //= 2  # the shirt's shaded half: same chromaticity
+    >>> split_by_colour(img, np.ones((4, 8), bool), 0.04).sum(axis=0).tolist()
+    [4, 4, 4, 0, 0, 4, 4, 4]
+    >>> split_by_colour(img, np.ones((4, 8), bool), 0.5) is None
+    True
+    """
+    require_shape("bgr", bgr, (*mask.shape, 3), np.uint8)
+    px = bgr[mask].astype(np.float32)
+    if len(px) < 2:
+        return None
+    rg = px[:, [2, 1]] / np.maximum(px.sum(axis=1, keepdims=True), 1.0)
+    lo, hi = np.percentile(rg[:, 0], [10.0, 90.0])
+    centres = np.stack([rg[rg[:, 0] <= lo].mean(axis=0), rg[rg[:, 0] >= hi].mean(axis=0)])
+    for _ in range(10):
+        near = np.argmin(((rg[:, None, :] - centres[None]) ** 2).sum(axis=2), axis=1)
+        new = np.stack(
+            [rg[near == j].mean(axis=0) if np.any(near == j) else centres[j] for j in (0, 1)]
+        )
+        if np.allclose(new, centres, atol=1e-3):
+            break
+        centres = new
+    if float(np.linalg.norm(centres[0] - centres[1])) < min_delta:
+        return None
+    cluster = np.full(mask.shape, -1, np.int8)
+    cluster[mask] = near
+    first, second = cluster == 0, cluster == 1
+    ring = np.ones((3, 3), np.uint8)
+    near_first = cv2.dilate(first.view(np.uint8), ring) > 0
+    near_second = cv2.dilate(second.view(np.uint8), ring) > 0
+    return (first & ~near_second) | (second & ~near_first)
+
+
 def extract_blobs(
     skin: np.ndarray,
     silhouettes: Silhouettes,
     cfg: BlobConfig,
     n_people_hint: int | None = None,
+    bgr: np.ndarray | None = None,
 ) -> BlobSet:
     """Connected skin regions inside silhouettes, the ceil(lambda * 3 * N_h) largest.
 
@@ -58,6 +115,9 @@ def extract_blobs(
     silhouettes : Silhouettes of the same frame (same H, W)
     cfg : BlobConfig (``min_blob_area_px``, ``blob_excess`` = lambda, ``silhouette_dilate_px``)
     n_people_hint : N_h; default the number of silhouettes; at least 1
+    bgr : (H, W, 3) uint8 frame, optional; with it, blobs too big to be a head or hand are
+        split by colour (:func:`split_by_colour`, ``cfg.split_min_delta``) before the size
+        filter, else dropped whole
 
     Returns
     -------
@@ -97,7 +157,26 @@ def extract_blobs(
         # blob's own: a person whose clothes match the background falls apart into short
         # pieces, and their head would be "too big" for the piece it sits on
         tallest = float(np.max(silhouettes.bottom_v_px - silhouettes.top_v_px)) + 1.0
-        ok = ok[areas[ok] <= cfg.max_blob_area_rel * tallest**2]
+        limit = cfg.max_blob_area_rel * tallest**2
+        too_big = ok[areas[ok] > limit]
+        if len(too_big) and bgr is not None and cfg.split_min_delta > 0:
+            # the face or hands of a person in skin-coloured clothes join it: split such
+            # regions by colour and size the pieces again
+            require_shape("bgr", bgr, (*shape, 3), np.uint8)
+            split = False
+            for k in too_big:
+                x, y, w, h = stats[k + 1, :4]
+                box = slice(y, y + h), slice(x, x + w)
+                own = labels[box] == k + 1
+                parts = split_by_colour(bgr[box], own, cfg.split_min_delta)
+                if parts is not None:
+                    inside[box] = (inside[box] & ~own) | parts
+                    split = True
+            if split:
+                n_all, labels, stats, centroids = components_with_stats(inside)
+                areas = stats[1:, cv2.CC_STAT_AREA].astype(np.int64)
+                ok = np.flatnonzero(areas >= max(cfg.min_blob_area_px, 1))
+        ok = ok[areas[ok] <= limit]
     n_h = max(n_people_hint if n_people_hint is not None else silhouettes.n, 1)
     n_keep = math.ceil(cfg.blob_excess * 3 * n_h)
     order = ok[np.argsort(-areas[ok], kind="stable")][:n_keep]  # 0-based blob index
@@ -140,5 +219,5 @@ def observe(
     """One camera frame -> silhouettes (updating ``background_model``), skin, blobs."""
     silhouettes = background_model.step(bgr)
     skin = skin_model.classify(bgr)
-    blobs = extract_blobs(skin, silhouettes, cfg, n_people_hint)
+    blobs = extract_blobs(skin, silhouettes, cfg, n_people_hint, bgr)
     return CameraObservation(camera, silhouettes, skin, blobs)

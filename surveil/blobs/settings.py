@@ -91,6 +91,13 @@ class BlobConfig:
         "the frame (a head is ~0.01): skin-coloured clothing, not a head or hand (0 = keep all)",
         min=0.0,
     )
+    split_min_delta: float = setting(
+        0.04,
+        "a too-big blob is split into its two chromaticity clusters (2-means on (r, g)) when "
+        "their centres are at least this far apart: a face or hand joined to a pale shirt "
+        "(0 = drop too-big blobs whole)",
+        min=0.0,
+    )
     blob_excess: float = setting(1.5, "lambda: keep ceil(lambda * 3 * N_h) largest", min=1.0)
     silhouette_dilate_px: int = setting(3, "grow silhouettes by this radius, px", min=0)
     open_px: int = setting(

@@ -31,6 +31,32 @@ def test_keeps_ceil_lambda_3n_largest_and_drops_small():
     assert blobs.labels.max() == 6 and (blobs.labels == 1).sum() == 81
 
 
+def test_a_dark_head_on_a_skin_coloured_shirt_is_split_off_by_colour(rng):
+    """A dark-skinned head sits on a beige shirt that the skin classifier also takes for
+    skin; together they are too big for a head or hand and would be dropped whole. With the
+    frame, the blob splits by chromaticity: the head stays a blob, the shirt (shaded on one
+    side, same chromaticity) is still too big and goes."""
+    sil = _one_person()
+    img = np.zeros((H, W, 3), np.uint8)
+    shirt = np.zeros((H, W), bool)
+    shirt[26:70, 22:78] = True
+    head = np.zeros((H, W), bool)
+    head[12:26, 42:56] = True
+    img[shirt] = (150, 180, 200)  # beige (BGR)
+    img[40:70, 50:78] = (100, 120, 133)  # the shirt's shaded side
+    img[head] = (40, 58, 92)  # dark skin
+    img = np.clip(img + rng.normal(0, 2, img.shape), 0, 255).astype(np.uint8)
+    skin = shirt | head
+    cfg = BlobConfig(min_blob_area_px=10, silhouette_dilate_px=0, open_px=0)
+    assert len(extract_blobs(skin, sil, cfg)) == 0
+    blobs = extract_blobs(skin, sil, cfg, bgr=img)
+    assert len(blobs) == 1
+    assert blobs.centroids_px[0] == pytest.approx([48.5, 18.5], abs=1.0)
+    assert (
+        len(extract_blobs(skin, sil, dataclasses.replace(cfg, split_min_delta=0.0), bgr=img)) == 0
+    )
+
+
 def test_opening_cuts_thin_rims_joining_blobs_and_keeps_small_hands():
     # a head and a hand joined by a two-pixel rim of colour fringe along the silhouette edge,
     # in a 640-pixel-wide frame (the opening's kernel size is given for that width)
