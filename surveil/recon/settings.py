@@ -61,6 +61,12 @@ class CandidateConfig:
         "in most views); 0 = off, m",
         min=0.0,
     )
+    rescue_pair_m: float = setting(
+        0.35,
+        "... only for a target with another expected within this (their blobs can merge; a "
+        "lone tracker on a ghost would rescue it forever), m",
+        min=0.0,
+    )
     support_radius_px: float = setting(
         8.0,
         "a blob whose centroid is within this of a candidate's projection supports it, px",

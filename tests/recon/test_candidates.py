@@ -126,9 +126,10 @@ def test_crossing_lines_of_sight_of_two_limbs_are_explained_away(enabled):
 
 
 def test_expected_position_spares_the_dropped_candidate_next_to_it():
-    """Explaining away drops G; a tracker that expects a target 5 cm from G gets it back, one
-    that expects a target at limb A (which has its candidate) or far from everything adds
-    nothing."""
+    """Explaining away drops G; a tracker that expects a target 5 cm from G, with another
+    target expected 25 cm away (hands about to meet), gets it back. One that expects a target
+    there alone (a tracker left on a ghost), at limb A (which has its candidate) or far from
+    everything adds nothing."""
     rig = _rig()
     a, b, g = _exact_ghost(rig)
     obs = [
@@ -139,7 +140,8 @@ def test_expected_position_spares_the_dropped_candidate_next_to_it():
     ]
     plain = make_candidates(obs, rig, CFG)
     for expected, ghost_back in (
-        ([g + [0.05, 0, 0]], True),
+        ([g + [0.05, 0, 0], g + [0.0, 0, 0.25]], True),
+        ([g + [0.05, 0, 0]], False),
         ([a], False),
         ([[0.5, 0.5, 1]], False),
     ):
@@ -155,6 +157,9 @@ def test_rescue_gives_each_expected_position_its_own_strongest_dropped_candidate
     # two hands expected side by side: the stronger nearby candidate, then the other one
     out = rescue_expected(pts, prior, keep, np.array([[0.1, 0, 1], [0.11, 0, 1]]), 0.05)
     assert out.tolist() == [False, True, True, True]
+    # ... but not one expected alone, when a partner is required within 0.3 m
+    out = rescue_expected(pts, prior, keep, np.array([[0.1, 0, 1], [0.6, 0, 1]]), 0.05, 0.3)
+    assert out.tolist() == keep.tolist()
     assert keep.tolist() == [False, False, False, True]  # the input is not modified
     one = rescue_expected(pts, prior, keep, np.array([[0.1, 0, 1]]), 0.05)
     assert one.tolist() == [False, False, True, True]
