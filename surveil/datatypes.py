@@ -379,6 +379,9 @@ class CarryEstimate:
     confidence : float -- 0..1
     hue_pdf : (B,) float64 -- fused, normalised hue distribution of the hand's region
         (B bins over [0, 360)), after skin (and optionally clothing) removal
+    since_ns : int | None -- time of the oldest sample in the fused window (None: no
+        samples); a later stage can tell whether the estimate still holds evidence from
+        before a given moment
     """
 
     target_id: int
@@ -388,6 +391,7 @@ class CarryEstimate:
     hue_deg: float | None
     confidence: float
     hue_pdf: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    since_ns: int | None = None
 
 
 @dataclass(frozen=True, slots=True)

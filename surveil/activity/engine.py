@@ -278,6 +278,15 @@ class ActivityEngine:
                 return fr.carry[target_id]
         return None
 
+    def _carry_since(self, target_id: int, t_ns: int, since_ns: int) -> CarryEstimate | None:
+        """The latest estimate at or before ``t_ns`` if its evidence all dates from
+        ``since_ns`` or later (else None): after a pick or place the fusion window still
+        holds the frames from before the hand let go for up to its length."""
+        est = self._latest_carry(target_id, t_ns)
+        if est is None or est.since_ns is None or est.since_ns < since_ns:
+            return None
+        return est
+
     def _approach_start(self, ids: tuple[int, int], climax_ns: int, rule: Rule) -> int:
         """The last time before the climax at which the two targets were ``separation_m``
         apart, looking back at most ``max_approach_s``; else the earliest time both were seen
@@ -609,7 +618,7 @@ class ActivityEngine:
             ready = (
                 st.apart_ns is not None
                 and t - st.apart_ns >= _ns(th.separation_delay_s)
-                and self._after_known(st.rule, [self._latest_carry(st.hand_id, t)])
+                and self._after_known(st.rule, [self._carry_since(st.hand_id, t, st.apart_ns)])
             )
             timed_out = t - st.detected_ns >= _ns(th.separation_timeout_s)
             if ready or timed_out:
@@ -623,7 +632,11 @@ class ActivityEngine:
         self, st: _StillEpisode, cur: _Frame, timed_out: bool
     ) -> ActivityEvent | None:
         rule, th = st.rule, st.rule.thresholds
-        after = self._latest_carry(st.hand_id, cur.t_ns)
+        after = None
+        if st.apart_ns is not None:
+            after = self._carry_since(st.hand_id, cur.t_ns, st.apart_ns)
+        if after is None:  # timed out before a clean window: the latest there is
+            after = self._latest_carry(st.hand_id, cur.t_ns)
         used: list[CarryEstimate | None] = []
         for req, est in ((rule.carry_before[0], st.before), (rule.carry_after[0], after)):
             if req is None:
@@ -631,12 +644,15 @@ class ActivityEngine:
             used.append(est)
             if not carry_satisfies(req, carry_state(est, th.min_confidence)):
                 log.debug(
-                    "%s: %s did not match (carry before %s, after %s%s)",
+                    "%s: %s did not match (carry before %s, after %s%s; left the still point "
+                    "at %s ns, decided at %d ns)",
                     rule.rule_id,
                     st.label,
                     _describe(st.before, th.min_confidence),
                     _describe(after, th.min_confidence),
                     ", timed out" if timed_out else "",
+                    st.apart_ns,
+                    cur.t_ns,
                 )
                 return None
         return ActivityEvent(

@@ -607,7 +607,8 @@ class CarryAnalyser:
             dress = self.dress(t.person) if cfg.subtract_dress and t.person > 0 else None
             if dress is not None:
                 pdf = subtract_distribution(pdf, dress)
-            est = self._estimate(t, t_ns, pdf, total_rho)
+            since = state.window.oldest_ns(t_ns, self._window_ns)
+            est = self._estimate(t, t_ns, pdf, total_rho, since)
             if not state.frozen:
                 state.last = est
             out[t.target_id] = est
@@ -699,7 +700,12 @@ class CarryAnalyser:
             self._dress[person] = (now, t_ns)
 
     def _estimate(
-        self, target: TargetSnapshot, t_ns: int, pdf: np.ndarray, total_rho: float
+        self,
+        target: TargetSnapshot,
+        t_ns: int,
+        pdf: np.ndarray,
+        total_rho: float,
+        since_ns: int | None,
     ) -> CarryEstimate:
         cfg = self.cfg
         decision = decide_carrying(
@@ -719,6 +725,7 @@ class CarryAnalyser:
             hue_deg=decision.hue_deg if decision.carrying else None,
             confidence=float(np.clip(decision.confidence, 0.0, 1.0)),
             hue_pdf=hue_pdf,
+            since_ns=since_ns,
         )
 
 

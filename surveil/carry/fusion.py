@@ -168,3 +168,9 @@ class HueWindow:
         sel = valid & (self._t_ns > t_ns - window_ns) & (self._t_ns <= t_ns)
         rho = self._rho[sel]
         return fuse_distributions(self._pdfs[sel], rho), float(rho.sum())
+
+    def oldest_ns(self, t_ns: int, window_ns: int) -> int | None:
+        """Time of the oldest sample :meth:`fused` would use at ``t_ns`` (None: none)."""
+        valid = np.arange(len(self._rho)) < self._n
+        sel = valid & (self._t_ns > t_ns - window_ns) & (self._t_ns <= t_ns)
+        return int(self._t_ns[sel].min()) if sel.any() else None

@@ -85,6 +85,7 @@ class Script:
     tracks: list[Track]
     joins: list[Join] = field(default_factory=list)
     duration_s: float = 4.0
+    window_s: float = 0.0  # each carry estimate's evidence spans this long before it
 
     def _identity(self, tid: int, t: float) -> Track:
         """The physical limb tracker ``tid`` follows at time t (swaps after a separation)."""
@@ -127,7 +128,13 @@ class Script:
                 t_eval = j.t_join_s if phase is Phase.COMBINED else t  # frozen while combined
                 carrying, hue, conf = limb_of.carry(t_eval)
                 carry[tr.tid] = CarryEstimate(
-                    tr.tid, snap.label, int(round(t * S)), carrying, hue, conf
+                    tr.tid,
+                    snap.label,
+                    int(round(t * S)),
+                    carrying,
+                    hue,
+                    conf,
+                    since_ns=int(round((t - self.window_s) * S)),
                 )
         return tuple(targets), carry
 

@@ -165,6 +165,18 @@ def test_place_reach_stop_return_leaves_object(rules):
     assert abs(ev.climax_ns - 1.1 * S) <= 0.1 * S
 
 
+def test_place_waits_for_carry_evidence_from_after_the_hand_left(rules):
+    """The carry stage fuses the last 0.8 s: for that long after the hand leaves the table
+    point (at ~1.9 s) its estimate still holds frames with the object beside it. The place
+    is decided on the first estimate whose evidence all comes after the hand left, not on
+    the stale one 0.2 s after leaving (which would still say 'holding')."""
+    script = reach(switch(2.5, holding(BLUE), empty()))
+    script.window_s = 0.8
+    ev = only(run(rules, script.stream()), "place")
+    assert ev.confidence == pytest.approx(0.9)  # decided, not timed out
+    assert ev.end_ns >= 2.6 * S
+
+
 def test_receiving_hand_that_stops_after_an_exchange_is_not_a_pick(rules):
     """The receiver's hand parts from the giver's, moves on a little and stops away from the
     body. Its reach is the pair's, seen through the combined state, and its carry estimate

@@ -159,6 +159,7 @@ def test_end_to_end_green_box_is_carried_and_bare_hand_is_not(camera):
     with_box = run(analyser, [make_frame(camera)] * 5, [hand_target()])
     est = with_box[1]
     assert est.carrying and abs(est.hue_deg - 120.0) < 5.0
+    assert est.since_ns == 0 and est.t_ns == 4 * NS  # the window holds all five frame sets
     assert est.label == "p1/right_hand" and 0.0 < est.confidence <= 1.0
     assert est.hue_pdf.sum() == pytest.approx(1.0)
     analyser.reset()
@@ -201,6 +202,7 @@ def test_window_freezes_while_hands_overlap_and_restarts_after(camera):
     # they separate: the window restarts, so the old box does not linger
     after = run(analyser, [bare] * 2, [a, b(apart)], t0=25 * NS)[1]
     assert not after.carrying and not analyser.is_frozen(1)
+    assert after.since_ns == 25 * NS  # its evidence starts at the separation
 
 
 def make_two_hands(camera, left_m, right_m):
