@@ -660,9 +660,9 @@ class CarryAnalyser:
         Per region (``dress_drops_m`` below the head, radius ``dress_radius_m``) the hued
         pixels of every camera are pooled into one distribution (summing to 1); the dress is
         the bin-wise maximum over the regions (shirt and trousers may differ: each must
-        cancel fully), averaged over time with the time constant ``dress_time_s``. The hands'
-        largest circles are left out, so an object held in front of the body is not dress.
-        People who are gone are forgotten."""
+        cancel fully), averaged over time with the time constant ``dress_time_s``, at most
+        every ``dress_interval_s``. The hands' largest circles are left out, so an object held
+        in front of the body is not dress. People who are gone are forgotten."""
         cfg = self.cfg
         heads = {
             t.person: t.mean_m
@@ -671,6 +671,12 @@ class CarryAnalyser:
         }
         for gone in set(self._dress) - set(heads):
             del self._dress[gone]
+        interval_ns = cfg.dress_interval_s * 1e9
+        heads = {
+            person: head_m
+            for person, head_m in heads.items()
+            if person not in self._dress or t_ns - self._dress[person][1] >= interval_ns
+        }
         if not heads:
             return
         views = [

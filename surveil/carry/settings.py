@@ -97,6 +97,12 @@ class CarryConfig:
     dress_time_s: float = setting(
         2.0, "time constant of the dress distribution's running average, s", min=0.0
     )
+    dress_interval_s: float = setting(
+        0.3,
+        "a person's dress is measured at most this often (it changes slowly; measuring every "
+        "frame set cost ~3 ms per set), s",
+        min=0.0,
+    )
     dress_min_pixels: int = setting(
         30, "a dress region needs this many pixels with a hue to update the average", min=1
     )
