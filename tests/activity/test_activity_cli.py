@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -84,6 +85,20 @@ def test_events_table_in_climax_order(tmp_path, rig, capsys):
     assert "p1/right_hand -> p2/left_hand" in lines[2]
     assert "green (120 deg)" in lines[2] and "0.91" in lines[2]
     assert "12.00-13.00" in lines[2]
+
+
+def test_events_table_read_back_matches_the_one_a_run_prints(tmp_path, rig, capsys):
+    """/events stores the confidence with 3 decimals; a run's table rounds the same way, so
+    a confidence of 0.98512 reads 0.99 in neither or both (stored 0.985 -> 0.98)."""
+    from surveil.activity.timeline import format_event_table
+    from surveil.io.mcap_writer import hue_name
+
+    ev = dataclasses.replace(CLAP, confidence=0.98512)
+    path = write_run(tmp_path / "run.mcap", rig, [ev])
+    assert main(["events", str(path)]) == ExitCode.OK
+    read_back = capsys.readouterr().out.splitlines()
+    assert format_event_table([ev], hue_name).splitlines() == read_back
+    assert " 0.98 " in read_back[1]
 
 
 def test_events_json_lines(tmp_path, rig, capsys):
