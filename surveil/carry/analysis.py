@@ -43,13 +43,7 @@ import numpy as np
 
 from surveil.camera import Camera, Rig
 from surveil.carry.fusion import HueWindow, decide_carrying, subtract_distribution
-from surveil.carry.hue import (
-    HUE_CODE_DEG,
-    hue_histogram,
-    pixel_hue_codes,
-    region_mode_pdf,
-    smooth_circular,
-)
+from surveil.carry.hue import NO_HUE, code_density, pixel_hue_codes, region_mode_pdf
 from surveil.carry.settings import CarryConfig
 from surveil.datatypes import CameraObservation, CarryEstimate, Limb, Phase, TargetSnapshot
 from surveil.validate import readonly, require_shape
@@ -459,12 +453,10 @@ def dress_view_hist(
     if not mask.any():
         return np.zeros(cfg.hue_bins), 0
     codes = pixel_hue_codes(bgr[rows, cols], cfg.min_saturation, cfg.min_value, mask=mask)
-    counts = np.bincount(codes.reshape(-1), minlength=256)[: len(HUE_CODE_DEG)]
-    n_px = int(counts.sum())
+    n_px = int(np.count_nonzero(codes != NO_HUE))
     if n_px == 0:
         return np.zeros(cfg.hue_bins), 0
-    hist = hue_histogram(HUE_CODE_DEG, cfg.hue_bins, n_total=1, weights=counts)
-    return smooth_circular(hist, cfg.kde_sigma_deg), n_px
+    return code_density(codes, cfg.hue_bins, cfg.kde_sigma_deg), n_px
 
 
 # ---------------------------------------------------------------------------------------------

@@ -163,14 +163,17 @@ class HueWindow:
         total_rho : float
             The summed reliability of the samples used (0 when none).
         """
-        # writing restarts at slot 0 after a clear, so the first n slots hold the samples
-        valid = np.arange(len(self._rho)) < self._n
-        sel = valid & (self._t_ns > t_ns - window_ns) & (self._t_ns <= t_ns)
+        sel = self._in_window(t_ns, window_ns)
         rho = self._rho[sel]
         return fuse_distributions(self._pdfs[sel], rho), float(rho.sum())
 
     def oldest_ns(self, t_ns: int, window_ns: int) -> int | None:
         """Time of the oldest sample :meth:`fused` would use at ``t_ns`` (None: none)."""
-        valid = np.arange(len(self._rho)) < self._n
-        sel = valid & (self._t_ns > t_ns - window_ns) & (self._t_ns <= t_ns)
+        sel = self._in_window(t_ns, window_ns)
         return int(self._t_ns[sel].min()) if sel.any() else None
+
+    def _in_window(self, t_ns: int, window_ns: int) -> np.ndarray:
+        """(capacity,) bool: the slots holding samples with ``t_ns - window_ns < t <= t_ns``."""
+        # writing restarts at slot 0 after a clear, so the first n slots hold the samples
+        valid = np.arange(len(self._rho)) < self._n
+        return valid & (self._t_ns > t_ns - window_ns) & (self._t_ns <= t_ns)

@@ -177,6 +177,34 @@ def hue_histogram(
     return counts / float(total)
 
 
+def code_density(
+    hue_codes: np.ndarray, n_bins: int, sigma_deg: float, n_total: int | None = None
+) -> np.ndarray:
+    """Smoothed hue histogram of an image of hue codes (:data:`NO_HUE` pixels ignored).
+
+    Parameters
+    ----------
+    hue_codes : (H, W) uint8
+    n_bins, sigma_deg : see :func:`hue_histogram` and :func:`smooth_circular`
+    n_total : int, optional
+        Divide the counts by this (default 1: plain pixel counts).
+
+    Returns
+    -------
+    (B,) float64
+
+    >>> codes = np.array([[0, 0, 60, NO_HUE]], np.uint8)  # 0 deg twice, 120 deg (bin 1) once
+    >>> d = code_density(codes, 4, 0.0)
+    >>> d.tolist()
+    [2.0, 1.0, 0.0, 0.0]
+    """
+    counts = np.bincount(hue_codes.reshape(-1), minlength=256)[: len(HUE_CODE_DEG)]
+    hist = hue_histogram(
+        HUE_CODE_DEG, n_bins, n_total=1 if n_total is None else n_total, weights=counts
+    )
+    return smooth_circular(hist, sigma_deg)
+
+
 def smooth_circular(hist: np.ndarray, sigma_deg: float) -> np.ndarray:
     """Kernel density estimate: the histogram convolved with a wrapped Gaussian.
 
@@ -441,9 +469,7 @@ def region_mode_pdf(
     if n_region == 0:
         return np.zeros(n_bins), np.zeros(0)
     region_codes = np.where(region, hue_codes, np.uint8(NO_HUE))
-    pixels_per_code = np.bincount(region_codes.reshape(-1), minlength=256)[: len(HUE_CODE_DEG)]
-    hist = hue_histogram(HUE_CODE_DEG, n_bins, n_total=n_region, weights=pixels_per_code)
-    density = smooth_circular(hist, sigma_deg)
+    density = code_density(region_codes, n_bins, sigma_deg, n_total=n_region)
     modes = find_modes(density, min_peak)
     if len(modes) == 0:
         return np.zeros(n_bins), np.zeros(0)
