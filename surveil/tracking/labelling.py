@@ -296,6 +296,77 @@ def facing_cues(
     return ev
 
 
+def owner_rule(
+    modes_m: np.ndarray, heads_m: np.ndarray, margin_m: float
+) -> tuple[tuple[int, int], float] | None:
+    """Which mode each of two separating hands of different people takes, by their owners.
+
+    Each hand goes back to its own body: of the two ways to give the modes to the hands, the
+    one with the smaller summed distance from each mode to its hand's head wins, if it is at
+    least ``margin_m`` smaller. Where it applies, this is stronger evidence than the angle
+    rule, which guesses when the hands part across the line they came along (a handshake
+    whose pair follows one hand sideways gives angles near 90 degrees).
+
+    Parameters
+    ----------
+    modes_m : (2, 3) float64 -- the two modes, metres
+    heads_m : (2, 3) float64 -- the heads of hand A's and hand B's people
+    margin_m : float -- how much better the winning assignment must be, metres
+
+    Returns
+    -------
+    ((mode of A, mode of B), gain_m) or None
+        ``gain_m`` is how much shorter the winning assignment is; None when it is shorter
+        by less than ``margin_m``.
+
+    Examples
+    --------
+    >>> heads = np.array([[0.0, 0, 1.7], [1.2, 0, 1.7]])
+    >>> owner_rule(np.array([[1.0, 0, 1.0], [0.2, 0, 1.0]]), heads, 0.2)[0]
+    (1, 0)
+    """
+    d = np.linalg.norm(
+        np.asarray(modes_m, dtype=np.float64)[:, None] - np.asarray(heads_m)[None], axis=2
+    )
+    straight = d[0, 0] + d[1, 1]  # A takes mode 0, B mode 1
+    crossed = d[1, 0] + d[0, 1]
+    gain = float(abs(straight - crossed))
+    if gain < margin_m:
+        return None
+    return ((0, 1) if straight < crossed else (1, 0)), gain
+
+
+def astray(
+    hand_m: np.ndarray, own_head_m: np.ndarray, other_heads_m: np.ndarray, cfg: LabellingConfig
+) -> bool:
+    """Whether a person's hand is out of their reach and within another person's.
+
+    True when the hand is farther than ``arm_reach_m`` from its own head and some other head
+    is within ``arm_reach_m`` and at least ``person_margin_m`` nearer (3-D distances): the
+    label went with the wrong target (a pair parted the wrong way round), since a hand cannot
+    leave its body.
+
+    Parameters
+    ----------
+    hand_m, own_head_m : (3,) float64
+    other_heads_m : (P, 3) float64 -- the other people's heads
+    cfg : LabellingConfig
+
+    Examples
+    --------
+    >>> heads = np.array([[1.2, 0, 1.6]])
+    >>> astray(np.array([1.1, 0.2, 0.8]), np.array([0.0, 0, 1.6]), heads, LabellingConfig())
+    True
+    >>> astray(np.array([0.6, 0.0, 1.0]), np.array([0.0, 0, 1.6]), heads, LabellingConfig())
+    False
+    """
+    own = float(np.linalg.norm(np.asarray(hand_m) - own_head_m))
+    if own <= cfg.arm_reach_m or len(other_heads_m) == 0:
+        return False
+    other = float(np.min(np.linalg.norm(np.asarray(other_heads_m) - hand_m, axis=1)))
+    return other <= cfg.arm_reach_m and other <= own - cfg.person_margin_m
+
+
 def angle_rule(
     before_a_to_b_m: np.ndarray, mode0_m: np.ndarray, mode1_m: np.ndarray
 ) -> tuple[tuple[int, int], float]:

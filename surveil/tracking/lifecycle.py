@@ -13,6 +13,8 @@ unlabelled      its estimate came within ``combine_distance``   combined
 unlabelled      the labelling cues gave it a full label         normal
 normal          unsupported for ``lost_frames``, or drifted     lost
 normal          close to another tracker (as above)             combined
+normal          its label was taken off (a hand out of its      unlabelled
+                person's reach, in another's)
 combined        unsupported for ``combined_lost_frames``        lost
                 (pooled level of the pair)
 combined        the two modes stayed apart                      unlabelled
@@ -41,6 +43,10 @@ Choices where the paper is silent, written down here:
 - A hand lost just before it meets another hand (their blobs merged, so its candidate
   vanished) is re-acquired onto that hand when the other reaches its coasted position; the
   two combine in the next frame set (the manager's ``_merge_lost``).
+- Labels are stable but not final: a hand that stays out of its person's reach and within
+  another person's has its label taken off (normal -> unlabelled) and is attached anew. The
+  paper's labelling runs once per track; a pair of two people's hands parted the wrong way
+  round would otherwise carry both people's labels swapped for the rest of the recording.
 - Losing support beats every other transition (a combined pair with no candidate is lost,
   both trackers at once, since they share one pooled likelihood level).
 """
@@ -66,6 +72,7 @@ class Evidence:
     reacquired : bool -- (lost) a candidate near its last position was found
     lost_for_s : float -- (lost) time since it was lost, s
     ever_labelled : bool -- it had a full label at some point
+    label_revoked : bool -- (normal) its label was taken off: it tracks another person's hand
     """
 
     confirmed: bool = False
@@ -77,6 +84,7 @@ class Evidence:
     reacquired: bool = False
     lost_for_s: float = 0.0
     ever_labelled: bool = False
+    label_revoked: bool = False
 
 
 def next_phase(phase: Phase, ev: Evidence, cfg: LifecycleConfig) -> Phase:
@@ -116,7 +124,7 @@ def next_phase(phase: Phase, ev: Evidence, cfg: LifecycleConfig) -> Phase:
         case Phase.UNLABELLED:
             return Phase.NORMAL if ev.labelled else phase
         case Phase.NORMAL:
-            return phase
+            return Phase.UNLABELLED if ev.label_revoked else phase
         case Phase.COMBINED:
             return Phase.UNLABELLED if ev.separated else phase
         case Phase.LOST:

@@ -70,6 +70,7 @@ class _Track:
     limb: Limb = Limb.UNKNOWN
     is_hand: bool | None = None  # typed as hand (True) / head (False); None = not yet
     attached_ns: int | None = None  # when a hand joined its person
+    astray_ns: int | None = None  # since when it is out of its person's reach (and in another's)
     misses: int = 0
     since_miss: int = 1 << 30  # frame sets since the last unsupported one
     level: float = 0.0
@@ -505,14 +506,20 @@ class MultiTargetTracker:
                 continue
             if tr.id in parted or tr.apart_frames >= lc.separate_frames:
                 continue
+            other = self._tracks[tr.partner]
             d = np.array([np.linalg.norm(seeds[i].position_m - tr.mean_m) for i in free])
             d0 = np.array([seeds[i].pair_first_m.get(tr.id, np.inf) for i in free])
-            k = int(np.argmin(d0))
-            if not (d[k] >= lc.separate_distance_m and d0[k] <= lc.pair_seed_gate_m):
+            fit = np.array([self._parting_fit(tr, other, seeds[i].position_m) for i in free])
+            ok = (
+                (d >= lc.separate_distance_m)
+                & (fit > 0)
+                & ((d0 <= lc.pair_seed_gate_m) | (fit > 1))
+            )
+            if not ok.any():
                 continue
+            k = int(np.argmin(np.where(ok, d0, np.inf)))
             idx = free.pop(k)
             seed = seeds[idx]
-            other = self._tracks[tr.partner]
             split = np.array([tr.mean_m, seed.position_m])
             vel = np.array([tr.vel_mps, seed.velocity_mps])
             for t in (tr, other):
@@ -523,6 +530,49 @@ class MultiTargetTracker:
             parted.update((tr.id, other.id))
             log.debug("t%d / t%d part on a new candidate at %s", tr.id, other.id, seed.position_m)
         return out
+
+    def _owner_heads(self, a: _Track, b: _Track) -> np.ndarray | None:
+        """(2, 3) the heads of a's and b's people when a and b are hands of two different
+        people with known heads; None otherwise (a clap, an unattached hand)."""
+        if not (a.is_hand and b.is_hand) or a.person == b.person or 0 in (a.person, b.person):
+            return None
+        heads = [self._head_m(a.person), self._head_m(b.person)]
+        if heads[0] is None or heads[1] is None:
+            return None
+        return np.array(heads)
+
+    def _head_m(self, person: int) -> np.ndarray | None:
+        """Where a person's head is: its tracker's estimate, or its last good one while lost."""
+        p = self._persons.get(person)
+        head = self._tracks.get(p.head_id) if p is not None and p.head_id is not None else None
+        if head is None:
+            return None
+        return head.mean_m if head.phase in ACTIVE else head.last_good_m
+
+    def _parting_fit(self, a: _Track, b: _Track, seed_m: np.ndarray) -> int:
+        """How well a seed fits as the hand leaving the combined pair of a and b: 0 not at all,
+        1 possibly, 2 surely.
+
+        Pairs of one person's hands (or of hands whose people are unknown) give 1. For two
+        people's hands, the pair's estimate and the seed are given to the hands by their
+        owners (:func:`lab.owner_rule`): 0 if either is then out of its owner's reach
+        (``arm_reach_m``; a seed out of reach is a ghost, a mismatched blob pair beside the
+        pair), 2 if the pair's estimate is out of reach of one owner and the seed within it
+        (the pair followed one hand home, and the seed is the other hand, wherever it
+        appeared), 1 otherwise."""
+        heads = self._owner_heads(a, b)
+        if heads is None:
+            return 1
+        modes = np.array([a.mean_m, seed_m])
+        (ma, mb), _ = lab.owner_rule(modes, heads, 0.0) or ((0, 1), 0.0)
+        reach = self.cfg.labelling.arm_reach_m
+        if (
+            np.linalg.norm(modes[ma] - heads[0]) > reach
+            or np.linalg.norm(modes[mb] - heads[1]) > reach
+        ):
+            return 0
+        pair_reach = np.linalg.norm(a.mean_m - heads, axis=1)
+        return 2 if (pair_reach > reach).any() else 1
 
     def _reacquire(self, seeds: list[_Pending], t_ns: int) -> dict[int, int]:
         """Lost tracker id -> index of the confirmed seed that re-acquires it.
@@ -724,6 +774,7 @@ class MultiTargetTracker:
                     self._new_person(tr, t_ns)
                 elif tr.type_llr <= -lcfg.decide_llr:
                     tr.is_hand = True
+        self._detach_astray(t_ns)
         self._attach_hands(t_ns)
         self._update_facing()
         self._decide_sides(t_ns)
@@ -774,6 +825,34 @@ class MultiTargetTracker:
                 persons.append(p)
                 heads.append(head.mean_m if head.phase in ACTIVE else head.last_good_m)
         return persons, np.array(heads).reshape(-1, 3)
+
+    def _detach_astray(self, t_ns: int) -> None:
+        """Take the label off a hand that stayed out of its person's reach and within
+        another's for ``reach_revise_s`` (:func:`lab.astray`): it tracks someone else's hand,
+        since a pair parted the wrong way round or the tracker slid across. It goes back to
+        unlabelled and is attached anew, and its person's slot is free for the real hand."""
+        lcfg = self.cfg.labelling
+        if lcfg.reach_revise_s <= 0:
+            return
+        persons, heads = self._live_heads()
+        for i, p in enumerate(persons):
+            others = np.delete(heads, i, axis=0)
+            for hid in list(p.hand_ids):
+                h = self._tracks.get(hid)
+                if h is None:
+                    continue
+                if h.phase is not Phase.NORMAL or not lab.astray(h.mean_m, heads[i], others, lcfg):
+                    h.astray_ns = None
+                    continue
+                if h.astray_ns is None:
+                    h.astray_ns = t_ns
+                if (t_ns - h.astray_ns) * 1e-9 < lcfg.reach_revise_s:
+                    continue
+                log.debug(
+                    "t%d (%s) is out of p%d's reach: label taken off", h.id, h.label, p.number
+                )
+                p.hand_ids.remove(hid)
+                h.person, h.limb, h.attached_ns, h.astray_ns = 0, Limb.UNKNOWN, None, None
 
     def _attach_hands(self, t_ns: int) -> None:
         persons, heads = self._live_heads()
@@ -908,6 +987,7 @@ class MultiTargetTracker:
                 if tr.lost_since_ns is not None
                 else 0.0,
                 ever_labelled=tr.ever_labelled,
+                label_revoked=tr.phase is Phase.NORMAL and not tr.labelled,
             )
             new = next_phase(tr.phase, ev, lc)
             if new is Phase.COMBINED and tr.phase is not Phase.COMBINED:
@@ -1007,12 +1087,23 @@ class MultiTargetTracker:
         return common[0][2] - common[0][1]
 
     def _separate(self, a: _Track, b: _Track) -> None:
-        """Apply the angle rule (section 7.1): a and b each restart on the mode it gives them."""
+        """Give a and b each a mode of the separating pair and restart them there: two people's
+        hands by their owners when that is clear (:func:`lab.owner_rule`, ``owner_margin_m``),
+        otherwise by the angle rule (section 7.1)."""
         modes, vel = a.split_m, a.split_vel_mps
         if modes is None or vel is None:
             return
-        (mode_a, mode_b), angle = lab.angle_rule(a.before_vec_m, modes[0], modes[1])
-        log.debug("t%d / t%d separate, angle %.0f deg", a.id, b.id, np.degrees(angle))
+        heads = self._owner_heads(a, b)
+        margin = self.cfg.labelling.owner_margin_m
+        by_owner = (
+            lab.owner_rule(modes, heads, margin) if heads is not None and margin > 0 else None
+        )
+        if by_owner is not None:
+            (mode_a, mode_b), gain = by_owner
+            log.debug("t%d / t%d separate by their owners (%.2f m shorter)", a.id, b.id, gain)
+        else:
+            (mode_a, mode_b), angle = lab.angle_rule(a.before_vec_m, modes[0], modes[1])
+            log.debug("t%d / t%d separate, angle %.0f deg", a.id, b.id, np.degrees(angle))
         self._reinit(a, modes[mode_a], vel[mode_a])
         self._reinit(b, modes[mode_b], vel[mode_b])
 

@@ -278,6 +278,19 @@ class LabellingConfig:
         "the nearest head must be this much closer than the second to claim a hand, m",
         min=0.0,
     )
+    owner_margin_m: float = setting(
+        0.2,
+        "a combined pair of two people's hands parts by their owners (each mode to the hand "
+        "whose head is nearer) when that assignment is this much shorter in summed distance "
+        "than the other; otherwise by the angle rule (0 = angle rule only), m",
+        min=0.0,
+    )
+    reach_revise_s: float = setting(
+        0.5,
+        "a hand out of its person's reach (arm_reach_m) and within another's for this long "
+        "loses its label and is attached anew (0 = never), s",
+        min=0.0,
+    )
     duplicate_head_m: float = setting(
         0.3,
         "a head-like target this close (horizontally) to a known head is not a head, m",
