@@ -555,24 +555,23 @@ class MultiTargetTracker:
 
         Pairs of one person's hands (or of hands whose people are unknown) give 1. For two
         people's hands, the pair's estimate and the seed are given to the hands by their
-        owners (:func:`lab.owner_rule`): 0 if either is then out of its owner's reach
-        (``arm_reach_m``; a seed out of reach is a ghost, a mismatched blob pair beside the
-        pair), 2 if the pair's estimate is out of reach of one owner and the seed within it
-        (the pair followed one hand home, and the seed is the other hand, wherever it
-        appeared), 1 otherwise."""
+        owners (:func:`lab.owner_rule`): 0 if either is then farther from its owner's head
+        than any hand can be (``arm_reach_m`` + ``person_margin_m``: a seed out of reach is
+        a ghost, a mismatched blob pair beside the pair), 2 if the pair's estimate is out of
+        one owner's reach (``arm_reach_m``; the pair followed the other hand home) and the
+        seed is that owner's, 1 otherwise."""
         heads = self._owner_heads(a, b)
         if heads is None:
             return 1
         modes = np.array([a.mean_m, seed_m])
         (ma, mb), _ = lab.owner_rule(modes, heads, 0.0) or ((0, 1), 0.0)
-        reach = self.cfg.labelling.arm_reach_m
-        if (
-            np.linalg.norm(modes[ma] - heads[0]) > reach
-            or np.linalg.norm(modes[mb] - heads[1]) > reach
-        ):
+        lcfg = self.cfg.labelling
+        seed_owner = 0 if ma == 1 else 1
+        reach = np.linalg.norm(modes[[ma, mb]] - heads, axis=1)
+        if (reach > lcfg.arm_reach_m + lcfg.person_margin_m).any():
             return 0
-        pair_reach = np.linalg.norm(a.mean_m - heads, axis=1)
-        return 2 if (pair_reach > reach).any() else 1
+        pair_reach = float(np.linalg.norm(a.mean_m - heads[seed_owner]))
+        return 2 if pair_reach > lcfg.arm_reach_m else 1
 
     def _reacquire(self, seeds: list[_Pending], t_ns: int) -> dict[int, int]:
         """Lost tracker id -> index of the confirmed seed that re-acquires it.

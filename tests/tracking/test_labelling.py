@@ -114,3 +114,23 @@ def test_a_head_has_a_body_under_it_and_a_ghost_does_not(rig, scale):
     # too few cameras: no verdict
     one = {"cam0": obs["cam0"]}
     assert lab.body_support(np.array([2.0, 2.0, 1.75]), rig, one, cfg) is None
+
+
+def test_owner_rule_gives_each_hand_the_mode_by_its_head_or_abstains():
+    heads = np.array([[2.0, 2.0, 1.7], [3.0, 2.0, 1.7]])
+    home_a, home_b = np.array([2.0, 1.75, 0.8]), np.array([3.0, 2.25, 0.8])
+    assert lab.owner_rule(np.array([home_a, home_b]), heads, 0.2)[0] == (0, 1)
+    assert lab.owner_rule(np.array([home_b, home_a]), heads, 0.2)[0] == (1, 0)
+    # both modes still in the middle: no clear owner, the angle rule decides
+    middle = np.array([[2.5, 2.0, 1.05], [2.52, 2.0, 0.8]])
+    assert lab.owner_rule(middle, heads, 0.2) is None
+
+
+def test_astray_needs_out_of_own_reach_and_within_anothers():
+    cfg = LabellingConfig()
+    own, other = np.array([2.0, 2.0, 1.7]), np.array([[3.0, 2.0, 1.7]])
+    assert lab.astray(np.array([3.0, 2.25, 0.8]), own, other, cfg)  # at the other's side
+    assert not lab.astray(np.array([2.5, 2.0, 1.05]), own, other, cfg)  # handshake: in reach
+    # far from its head but nobody else's either (a tall person's hand hanging, a long reach)
+    assert not lab.astray(np.array([3.0, 2.0, 0.8]), own, np.array([[4.5, 2.0, 1.7]]), cfg)
+    assert not lab.astray(np.array([3.0, 2.25, 0.8]), own, np.empty((0, 3)), cfg)

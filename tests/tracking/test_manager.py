@@ -574,3 +574,106 @@ def test_a_new_tracker_that_meets_a_persons_hand_is_lost_not_combined(rig, rng):
     lost = [t.target_id for f in out for t in f.transitions if t.new is Phase.LOST]
     assert not combined and new[0] in lost and hand_id not in lost
     assert {s.label: s.target_id for s in out[-1].targets}["p1/right_hand"] == hand_id
+
+
+def handshake_frames(drop: bool, ghost: bool):
+    """Two people 1 m apart (a at x = 2.0 facing +x, b at x = 3.0 facing -x) shake right hands
+    at frame 45; their hands merge into one candidate for six frames. Then:
+
+    - ``drop``: b's hand stays put for four frames and goes home; a's hand leaves unseen for
+      two frames and reappears 25 cm straight below the handshake (a departure at right
+      angles to the line the hands came along, which the angle rule cannot read), then goes
+      home;
+    - otherwise: b's hand goes home at once, and a's hand, unseen for seven frames, reappears
+      already back at a's side.
+
+    ``ghost`` adds a mismatched blob pair 35 cm above b's left hand from the fifth frame after
+    the parting (the pair, following b's hand, is out of a's reach by then). Returns
+    (frames, a, b)."""
+    a, b = body((2.0, 2.0), 0.0), body((3.0, 2.0), 180.0)
+    meet = np.array([2.5, 2.0, 1.05])
+    rest = lambda p: [p["head"], p["left_hand"]]  # noqa: E731
+    frames = [[*rest(a), a["right_hand"], *rest(b), b["right_hand"]] for _ in range(45)]
+    for u in np.linspace(0, 1, 9)[1:]:
+        ra = a["right_hand"] + u * (meet - a["right_hand"])
+        rb = b["right_hand"] + u * (meet - b["right_hand"])
+        frames.append([*rest(a), *rest(b), *merged([ra, rb])])
+    frames += [[*rest(a), *rest(b), meet] for _ in range(6)]
+    low = meet + np.array([0.02, 0.0, -0.25])
+    wait = 4 if drop else 0
+    home_b = [meet] * wait + [
+        meet + u * (b["right_hand"] - meet) for u in np.linspace(0, 1, 7)[1:]
+    ]
+    home_b += [b["right_hand"]] * 30
+    for k, rb in enumerate(home_b):
+        if k < (2 if drop else 7):
+            ra = None
+        elif drop:
+            ra = low + min(max(k - 5, 0) / 6, 1.0) * (a["right_hand"] - low)
+        else:
+            ra = a["right_hand"]
+        pts = [*rest(a), *rest(b), rb] + ([ra] if ra is not None else [])
+        if ghost and 4 <= k < 12:
+            pts.append(b["left_hand"] + [0.0, 0.0, 0.35])
+        frames.append(pts)
+    return frames, a, b
+
+
+def _owner_of(frame: TrackFrame, point: np.ndarray) -> str:
+    """The label of the target nearest a point, with its person replaced by the person of the
+    head nearest that point (so the check does not depend on which head became p1)."""
+    near = min(frame.targets, key=lambda s: np.linalg.norm(s.mean_m - point))
+    assert np.linalg.norm(near.mean_m - point) < 0.05
+    return near.label
+
+
+def _assert_right_hands_owned(frame: TrackFrame, a, b) -> None:
+    heads = {s.person: s.mean_m for s in frame.targets if s.label.endswith("/head")}
+    for p in (a, b):
+        label = _owner_of(frame, p["right_hand"])
+        person = min(heads, key=lambda k: np.linalg.norm(heads[k] - p["head"]))
+        assert label == f"p{person}/right_hand"
+
+
+def test_a_ghost_beside_shaking_hands_does_not_take_a_hand_away(rig, rng):
+    """After a handshake the pair follows b's hand home; a's hand reappears at a's side, 1.2 m
+    from the pair, and a ghost appears beside the pair, out of a's reach. The ghost must not
+    part the pair (it would take a's label to b's side); a's hand does, although it is
+    beyond pair_seed_gate_m, because the pair is out of a's reach and the hand is within it."""
+    frames, a, b = handshake_frames(drop=False, ghost=True)
+    out = run(MultiTargetTracker(TrackingConfig(), rig, seed=11), frames, rng)
+    splits = [t for f in out for t in f.transitions if t.old is Phase.COMBINED]
+    starts = [t for f in out[53:] for t in f.transitions if t.old is Phase.UNINITIALISED]
+    assert len(splits) == 2
+    assert all(np.linalg.norm(t.position_m - b["left_hand"]) > 0.2 for t in starts)
+    _assert_right_hands_owned(out[-1], a, b)
+
+
+@pytest.mark.parametrize("revise_s", [0.5, 0.0])
+def test_a_hand_taken_for_the_wrong_person_is_relabelled(rig, rng, revise_s):
+    """b's right hand shows before b's head does (b's head hidden), held out 85 cm from a's
+    head while a's own right hand is hidden: a claims it. When b's head appears and the hand
+    goes home, it is out of a's reach and within b's: after reach_revise_s it loses its label
+    (normal -> unlabelled) and joins b, and a's right hand, shown again, takes a's free slot
+    (with 0, never: b's hand keeps a's label)."""
+    a, b = body((2.0, 2.0), 0.0), body((3.0, 2.0), 180.0)
+    held = np.array([2.6, 2.0, 1.1])
+    frames = [[a["head"], a["left_hand"], held] for _ in range(45)]
+    for k in range(45):
+        u = min((k + 1) / 6, 1.0)
+        hand_b = held + u * (b["right_hand"] - held)
+        frames.append(
+            [a["head"], a["left_hand"], a["right_hand"], b["head"], b["left_hand"], hand_b]
+        )
+    cfg = TrackingConfig(labelling=LabellingConfig(reach_revise_s=revise_s))
+    out = run(MultiTargetTracker(cfg, rig, seed=12), frames, rng)
+    assert _owner_of(out[44], held).startswith("p1/")  # claimed by a (the only person yet)
+    revoked = [
+        t for f in out for t in f.transitions if (t.old, t.new) == (Phase.NORMAL, Phase.UNLABELLED)
+    ]
+    if revise_s > 0:
+        assert len(revoked) == 1
+        _assert_right_hands_owned(out[-1], a, b)
+    else:
+        assert not revoked
+        assert _owner_of(out[-1], b["right_hand"]).startswith("p1/")
