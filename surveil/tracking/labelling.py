@@ -341,10 +341,12 @@ def astray(
 ) -> bool:
     """Whether a person's hand is out of their reach and within another person's.
 
-    True when the hand is farther than ``arm_reach_m`` from its own head and some other head
-    is within ``arm_reach_m`` and at least ``person_margin_m`` nearer (3-D distances): the
-    label went with the wrong target (a pair parted the wrong way round), since a hand cannot
-    leave its body.
+    True when the hand is farther than ``arm_reach_m`` + ``person_margin_m`` from its own
+    head (beyond any reach, with room for a tall person and estimation error; a hand held
+    out to shake another's can be just beyond ``arm_reach_m``) and some other head is within
+    ``arm_reach_m`` and at least ``person_margin_m`` nearer (3-D distances): the label went
+    with the wrong target (a pair parted the wrong way round), since a hand cannot leave its
+    body.
 
     Parameters
     ----------
@@ -361,7 +363,7 @@ def astray(
     False
     """
     own = float(np.linalg.norm(np.asarray(hand_m) - own_head_m))
-    if own <= cfg.arm_reach_m or len(other_heads_m) == 0:
+    if own <= cfg.arm_reach_m + cfg.person_margin_m or len(other_heads_m) == 0:
         return False
     other = float(np.min(np.linalg.norm(np.asarray(other_heads_m) - hand_m, axis=1)))
     return other <= cfg.arm_reach_m and other <= own - cfg.person_margin_m
