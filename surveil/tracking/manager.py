@@ -509,7 +509,10 @@ class MultiTargetTracker:
             other = self._tracks[tr.partner]
             d = np.array([np.linalg.norm(seeds[i].position_m - tr.mean_m) for i in free])
             d0 = np.array([seeds[i].pair_first_m.get(tr.id, np.inf) for i in free])
-            fit = np.array([self._parting_fit(tr, other, seeds[i].position_m) for i in free])
+            heads = self._owner_heads(tr, other)
+            fit = np.array(
+                [self._parting_fit(heads, tr.mean_m, seeds[i].position_m) for i in free]
+            )
             ok = (
                 (d >= lc.separate_distance_m)
                 & (fit > 0)
@@ -549,29 +552,31 @@ class MultiTargetTracker:
             return None
         return head.mean_m if head.phase in ACTIVE else head.last_good_m
 
-    def _parting_fit(self, a: _Track, b: _Track, seed_m: np.ndarray) -> int:
-        """How well a seed fits as the hand leaving the combined pair of a and b: 0 not at all,
-        1 possibly, 2 surely.
+    def _parting_fit(
+        self, heads: np.ndarray | None, pair_m: np.ndarray, seed_m: np.ndarray
+    ) -> int:
+        """How well a seed fits as the hand leaving a combined pair at ``pair_m``: 0 not at
+        all, 1 possibly, 2 surely. ``heads``: the owners' heads (:meth:`_owner_heads`).
 
-        Pairs of one person's hands (or of hands whose people are unknown) give 1. For two
-        people's hands, the pair's estimate and the seed are given to the hands by their
-        owners (:func:`lab.owner_rule`): 0 if either is then farther from its owner's head
-        than any hand can be (``arm_reach_m`` + ``person_margin_m``: a seed out of reach is
-        a ghost, a mismatched blob pair beside the pair), 2 if the pair's estimate is out of
-        one owner's reach (``arm_reach_m``; the pair followed the other hand home) and the
-        seed is that owner's, 1 otherwise."""
-        heads = self._owner_heads(a, b)
+        Pairs of one person's hands (or of hands whose people are unknown, ``heads`` None)
+        give 1. For two people's hands, the pair's estimate and the seed are given to the
+        hands by their owners (:func:`lab.owner_rule`): 0 if either is then farther from its
+        owner's head than any hand can be (``arm_reach_m`` + ``person_margin_m``: a seed out
+        of reach is a ghost, a mismatched blob pair beside the pair), 2 if the pair's
+        estimate is out of the seed's owner's reach (``arm_reach_m``; the pair followed the
+        other hand home), 1 otherwise."""
         if heads is None:
             return 1
-        modes = np.array([a.mean_m, seed_m])
-        (ma, mb), _ = lab.owner_rule(modes, heads, 0.0) or ((0, 1), 0.0)
+        modes = np.array([pair_m, seed_m])
+        decided = lab.owner_rule(modes, heads, 0.0)
+        assert decided is not None  # a zero margin always decides
+        owners_modes = list(decided[0])  # the mode of head 0, of head 1
         lcfg = self.cfg.labelling
-        seed_owner = 0 if ma == 1 else 1
-        reach = np.linalg.norm(modes[[ma, mb]] - heads, axis=1)
+        reach = np.linalg.norm(modes[owners_modes] - heads, axis=1)
         if (reach > lcfg.arm_reach_m + lcfg.person_margin_m).any():
             return 0
-        pair_reach = float(np.linalg.norm(a.mean_m - heads[seed_owner]))
-        return 2 if pair_reach > lcfg.arm_reach_m else 1
+        seed_owner = owners_modes.index(1)
+        return 2 if np.linalg.norm(pair_m - heads[seed_owner]) > lcfg.arm_reach_m else 1
 
     def _reacquire(self, seeds: list[_Pending], t_ns: int) -> dict[int, int]:
         """Lost tracker id -> index of the confirmed seed that re-acquires it.
@@ -819,10 +824,10 @@ class MultiTargetTracker:
     def _live_heads(self) -> tuple[list[_Person], np.ndarray]:
         persons, heads = [], []
         for p in self._persons.values():
-            head = self._tracks.get(p.head_id) if p.head_id is not None else None
-            if head is not None:
+            head_m = self._head_m(p.number)
+            if head_m is not None:
                 persons.append(p)
-                heads.append(head.mean_m if head.phase in ACTIVE else head.last_good_m)
+                heads.append(head_m)
         return persons, np.array(heads).reshape(-1, 3)
 
     def _detach_astray(self, t_ns: int) -> None:
@@ -906,7 +911,7 @@ class MultiTargetTracker:
                 other = Limb.RIGHT_HAND if decided[0] is Limb.LEFT_HAND else Limb.LEFT_HAND
                 undecided[0].limb = other
                 continue
-            head_m = head.mean_m if head.phase in ACTIVE else head.last_good_m
+            head_m = self._head_m(p.number)
             waited = max((t_ns - (h.attached_ns or t_ns)) * 1e-9 for h in undecided)
             ready = np.linalg.norm(p.facing_ev) >= lcfg.facing_min
             if not ready and waited < lcfg.lr_max_wait_s:

@@ -288,8 +288,7 @@ class LabellingConfig:
     reach_revise_s: float = setting(
         0.5,
         "a hand out of its person's reach (arm_reach_m + person_margin_m) and within another's "
-        "for this long "
-        "loses its label and is attached anew (0 = never), s",
+        "for this long loses its label and is attached anew (0 = never), s",
         min=0.0,
     )
     duplicate_head_m: float = setting(
