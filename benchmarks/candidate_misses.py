@@ -43,7 +43,13 @@ from surveil.datatypes import CameraObservation
 from surveil.io.ground_truth import load_ground_truth
 from surveil.io.recording import open_recording
 from surveil.pipeline import PipelineConfig, load_pipeline_config
-from surveil.recon.candidates import gauss_term, make_candidates, silhouette_prior
+from surveil.recon.candidates import (
+    blob_rows,
+    floor_relative_v,
+    gauss_term,
+    make_candidates,
+    silhouette_prior,
+)
 from surveil.recon.settings import CandidateConfig
 from surveil.recon.triangulate import closest_points
 from surveil.synth.scene import synthesise
@@ -110,7 +116,7 @@ def classify_miss(
     # every pair of own blobs: the points they triangulate and their prior terms
     cams = sorted(own)
     pairs = [(a, b) for i, a in enumerate(cams) for b in cams[i + 1 :]]
-    o1, d1, o2, d2, dv = [], [], [], [], []
+    o1, d1, o2, d2 = [], [], [], []
     for a, b in pairs:
         oa, da = rig.cameras[a].backproject(obs_by_cam[a].blobs.centroids_px[[own[a]]])
         ob, db = rig.cameras[b].backproject(obs_by_cam[b].blobs.centroids_px[[own[b]]])
@@ -118,12 +124,19 @@ def classify_miss(
         d1.append(da[0])
         o2.append(ob)
         d2.append(db[0])
-        dv.append(obs_by_cam[a].blobs.rel_v[own[a]] - obs_by_cam[b].blobs.rel_v[own[b]])
     pts, gap = closest_points(np.array(o1), np.array(d1), np.array(o2), np.array(d2))
     close = np.linalg.norm(pts - pos_m, axis=1) < 0.1
     if not close.any():
         return "triangulation"
-    p_o = gauss_term(np.array(dv), cfg.sigma_rel_v)
+    d_v = []
+    for side in (0, 1):
+        cams = np.array([pair[side] for pair in pairs])
+        if cfg.rel_v_to_floor:
+            rows = np.array([[r[own[m]] for r in blob_rows(obs_by_cam[m])] for m in cams])
+            d_v.append(floor_relative_v(pts, cams, rows[:, 0], rows[:, 1], rig))
+        else:
+            d_v.append(np.array([obs_by_cam[m].blobs.rel_v[own[m]] for m in cams]))
+    p_o = gauss_term(d_v[0] - d_v[1], cfg.sigma_rel_v)
     p_t = gauss_term(gap, cfg.sigma_gap_m)
     p_b = silhouette_prior(
         pts, rig, obs_by_cam, cfg.sigma_silhouette_px, cfg.silhouette_drop_worst

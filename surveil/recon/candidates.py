@@ -38,6 +38,44 @@ def gauss_term(x: np.ndarray, sigma: float) -> np.ndarray:
     return np.where(np.isfinite(x), g, 0.0)
 
 
+def floor_relative_v(
+    points_m: np.ndarray, cams: np.ndarray, v_px: np.ndarray, top_px: np.ndarray, rig: Rig
+) -> np.ndarray:
+    """D_v of eq. 25 measured down to the floor: (v - top) / (v_floor - top).
+
+    The paper's D_v (``BlobSet.rel_v``) divides by the silhouette's height; where legs are
+    hidden (behind a table, by a person in front, in a camera whose background model lost
+    them) the silhouette's bottom row is not the feet. Here the bottom is the image row of
+    the floor point under Z, which the calibration gives (docs/candidates.md, "p_o").
+
+    Parameters
+    ----------
+    points_m : (N, 3) float -- the candidate Z each blob takes part in, m
+    cams : (N,) int -- rig index of the blob's camera
+    v_px, top_px : (N,) float -- the blob centroid's row and its silhouette's top row, px
+    rig : Rig
+
+    Returns
+    -------
+    (N,) float64, 0 at the silhouette's top and 1 on the floor under Z; the denominator is
+    at least 1 px.
+    """
+    floor = np.array(points_m, dtype=np.float64)
+    floor[:, 2] = 0.0
+    bottom = np.empty(len(floor))
+    for m in np.unique(cams):
+        sel = cams == m
+        bottom[sel] = rig.cameras[int(m)].project(floor[sel])[0][:, 1]
+    return (v_px - top_px) / np.maximum(bottom - top_px, 1.0)
+
+
+def blob_rows(obs: CameraObservation) -> tuple[np.ndarray, np.ndarray]:
+    """(B,) row of every blob's centroid and (B,) top row of its silhouette, px (0, the
+    frame's top, for a blob outside every silhouette)."""
+    tops = np.concatenate([[0.0], np.asarray(obs.silhouettes.top_v_px, dtype=np.float64)])
+    return obs.blobs.centroids_px[:, 1], tops[obs.blobs.silhouette]
+
+
 def silhouette_prior(
     points_m: np.ndarray,
     rig: Rig,
@@ -289,7 +327,7 @@ def make_candidates(
     seen = sorted(m for m, obs in by_cam.items() if len(obs.blobs) > 0)
     if len(seen) < 2:
         return _empty()
-    origins, dirs, rel_v, cam_of, blob_of = [], [], [], [], []
+    origins, dirs, rel_v, rows, cam_of, blob_of = [], [], [], [], [], []
     for m in seen:
         blobs = by_cam[m].blobs
         origin, d = rig.cameras[m].backproject(blobs.centroids_px)
@@ -297,11 +335,13 @@ def make_candidates(
         origins.append(np.broadcast_to(origin, (n, 3)))
         dirs.append(d)
         rel_v.append(blobs.rel_v)
+        rows.append(np.column_stack(blob_rows(by_cam[m])))
         cam_of.append(np.full(n, m, dtype=np.int64))
         blob_of.append(np.arange(n, dtype=np.int64))
     origins_all = np.concatenate(origins)
     dirs_all = np.concatenate(dirs)
     rel_v_all = np.concatenate(rel_v)
+    rows_all = np.concatenate(rows)
     cam_all = np.concatenate(cam_of)
     blob_all = np.concatenate(blob_of)
     starts = np.cumsum([0] + [len(d) for d in dirs])
@@ -326,7 +366,11 @@ def make_candidates(
         ahead2 = np.einsum("ij,ij->i", points - o2, d2) > 0
         geometric = ahead1 & ahead2 & (half_gap <= cfg.max_gap_m) & (points[:, 2] >= cfg.min_z_m)
     # eq. 25 (relative v consistency) and eq. 26 (reconstruction error)
-    p_o = gauss_term(rel_v_all[ia] - rel_v_all[ib], cfg.sigma_rel_v)
+    if cfg.rel_v_to_floor:
+        d_v = [floor_relative_v(points, cam_all[g], *rows_all[g].T, rig) for g in (ia, ib)]
+    else:
+        d_v = [rel_v_all[ia], rel_v_all[ib]]
+    p_o = gauss_term(d_v[0] - d_v[1], cfg.sigma_rel_v)
     p_t = gauss_term(half_gap, cfg.sigma_gap_m)
     keep = geometric & (p_o >= cfg.term_threshold) & (p_t >= cfg.term_threshold)
     keep &= p_o * p_t >= cfg.prior_threshold  # p_b <= 1 cannot raise the product

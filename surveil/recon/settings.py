@@ -18,6 +18,12 @@ class CandidateConfig:
     sigma_rel_v: float = setting(
         0.1, "p_o width (eq. 25): std of the relative-v difference, unitless", min=1e-6
     )
+    rel_v_to_floor: bool = setting(
+        True,
+        "p_o measures a blob's relative v down to the floor under Z instead of down to its "
+        "silhouette's bottom row, which is not the feet where legs are hidden (behind a table, "
+        "by another person, in a late camera); not in the paper (docs/candidates.md)",
+    )
     sigma_gap_m: float = setting(
         0.02, "p_t width (eq. 26): std of the half gap d between lines of sight, m", min=1e-6
     )

@@ -12,12 +12,20 @@ from surveil.camera import Camera, Rig, look_at
 from surveil.config import from_table
 from surveil.datatypes import BlobSet, CameraObservation, CandidateSet, Silhouettes
 from surveil.errors import ConfigError
-from surveil.recon.candidates import _merge, explain_away, make_candidates, rescue_expected
+from surveil.recon.candidates import (
+    _merge,
+    blob_rows,
+    explain_away,
+    floor_relative_v,
+    make_candidates,
+    rescue_expected,
+)
 from surveil.recon.settings import CandidateConfig
 
 W, H = 320, 240
 CFG = CandidateConfig()
 PAPER = CandidateConfig(silhouette_drop_worst=False)  # p_b over every camera (eq. 27)
+SIL_BOTTOM = CandidateConfig(rel_v_to_floor=False)  # the paper's D_v: down to the silhouette
 
 
 def _rig(n: int = 4) -> Rig:
@@ -178,11 +186,63 @@ def test_mismatched_relative_v_makes_p_o_small():
         _observation(rig.cameras[0], HEAD, rel_v=np.array([0.2])),
         _observation(rig.cameras[1], HEAD, rel_v=np.array([0.8])),
     ]
-    assert len(make_candidates(obs, rig, CFG).points_m) == 0
+    assert len(make_candidates(obs, rig, SIL_BOTTOM).points_m) == 0
     # a small mismatch passes with p(Z) = p_o = exp(-dv^2 / (2 sigma^2))
     obs[1] = _observation(rig.cameras[1], HEAD, rel_v=np.array([0.35]))
-    cs = make_candidates(obs, rig, CFG)
+    cs = make_candidates(obs, rig, SIL_BOTTOM)
     np.testing.assert_allclose(cs.prior, [np.exp(-0.5 * (0.15 / CFG.sigma_rel_v) ** 2)])
+
+
+def _standing(cam: Camera, at_m, blobs_m: np.ndarray, hidden_below_m: float = 0.0):
+    """A person 1.8 m tall standing at ``at_m`` (x, y), seen by ``cam`` down to
+    ``hidden_below_m`` (a table in front hides the rest), with skin blobs at ``blobs_m``;
+    rel_v as the blob stage measures it, down to the silhouette's bottom row."""
+    x, y = at_m
+    ends = cam.project(np.array([[x, y, 1.8], [x, y, hidden_below_m]]))[0]
+    mask = np.zeros((H, W), np.uint8)
+    cv2.line(mask, *(tuple(int(c) for c in np.rint(p)) for p in ends), 255, 16)
+    rows = np.flatnonzero(mask.any(axis=1))
+    top, bottom = float(rows.min()), float(rows.max())
+    dist = cv2.distanceTransform((mask == 0).astype(np.uint8), cv2.DIST_L2, 5)
+    sil = Silhouettes((mask > 0).astype(np.int32), np.array([top]), np.array([bottom]), dist)
+    px = cam.project(blobs_m)[0]
+    n = len(blobs_m)
+    blobs = BlobSet(
+        centroids_px=px,
+        areas_px=np.full(n, 50, np.int64),
+        bboxes_px=np.zeros((n, 4), np.int32),
+        silhouette=np.ones(n, np.int32),
+        rel_v=(px[:, 1] - top) / (bottom - top),
+        labels=np.zeros((H, W), np.int32),
+    )
+    return CameraObservation(cam.name, sil, np.zeros((H, W), bool), blobs)
+
+
+def test_relative_v_down_to_the_floor_keeps_a_hand_whose_legs_are_hidden_in_one_view():
+    """A table hides the legs below 0.9 m from cam1: the silhouette's bottom row is the
+    table's edge, so the hand sits far lower in cam1's silhouette than in cam0's and the
+    paper's p_o rejects the pair. Measured down to the floor under Z, the two agree, and a
+    head still differs from a hand of the same silhouette by more than 3 sigma."""
+    rig = _rig(2)
+    hand = np.array([[3.0, 2.0, 1.1]])
+    head = np.array([[3.0, 2.0, 1.65]])
+    obs = [
+        _standing(rig.cameras[0], (3.0, 2.0), hand),
+        _standing(rig.cameras[1], (3.0, 2.0), hand, hidden_below_m=0.9),
+    ]
+    assert obs[1].blobs.rel_v[0] - obs[0].blobs.rel_v[0] > 0.2
+    assert len(make_candidates(obs, rig, SIL_BOTTOM).points_m) == 0
+    cs = make_candidates(obs, rig, CFG)
+    np.testing.assert_allclose(cs.points_m, hand, atol=1e-6)
+    assert cs.prior[0] > 0.8
+    # the floor-based D_v still tells a head from a hand of the same (truncated) silhouette
+    both = np.concatenate([hand, head])
+    cam1 = _standing(rig.cameras[1], (3.0, 2.0), both, hidden_below_m=0.9)
+    v, top = blob_rows(cam1)
+    d_v = floor_relative_v(both, np.array([1, 1]), v, top, rig)
+    d_v0 = floor_relative_v(hand, np.array([0]), *blob_rows(obs[0]), rig)
+    assert abs(d_v[0] - d_v0[0]) < 0.05
+    assert d_v[0] - d_v[1] > 3 * CFG.sigma_rel_v
 
 
 def test_blobs_of_different_points_have_a_large_gap_and_are_dropped():
@@ -229,7 +289,7 @@ def test_pairs_of_one_point_merge_into_the_strongest_with_a_boosted_prior():
         _observation(cam, HEAD, rel_v=np.array([rv]))
         for cam, rv in zip(rig, (0.5, 0.6, 0.7), strict=True)
     ]
-    cfg = dataclasses.replace(CFG, prior_threshold=0.1)  # keep the weak pair (0, 2)
+    cfg = dataclasses.replace(SIL_BOTTOM, prior_threshold=0.1)  # keep the weak pair (0, 2)
     cs = make_candidates(obs, rig, cfg)
     strong = np.exp(-0.5)  # |dv| = 0.1 = sigma for pairs (0, 1) and (1, 2)
     weak = np.exp(-2.0)  # |dv| = 0.2 for pair (0, 2)
