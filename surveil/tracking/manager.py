@@ -66,6 +66,9 @@ class _Track:
     last_good_m: np.ndarray
     last_good_ns: int = 0
     last_good_vel_mps: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    # its last supported time before its latest miss began (a tracker that slid onto another
+    # target's candidate is supported again, and its last_good_* follow the slide)
+    miss_from_ns: int = 0
     person: int = 0
     limb: Limb = Limb.UNKNOWN
     is_hand: bool | None = None  # typed as hand (True) / head (False); None = not yet
@@ -299,6 +302,8 @@ class MultiTargetTracker:
             tr.cov_m2 = cov[i, :3, :3].copy()
             tr.level = float(level[i])
             if tr.level < self.cfg.lifecycle.lost_level:
+                if tr.misses == 0:
+                    tr.miss_from_ns = tr.last_good_ns
                 tr.misses += 1
                 tr.since_miss = 0
             else:
@@ -357,10 +362,14 @@ class MultiTargetTracker:
         missing = np.array([tr.misses > 0 for tr in cand])
         hands = hand[iu] & hand[ju]
         # two hands of people meeting often leave one candidate (their blobs merge), which
-        # the nearer tracker takes: the other loses its support beside it; they have met
-        close = (d[iu, ju] < lc.combine_distance_m) | (
-            hands & (missing[iu] | missing[ju]) & (d[iu, ju] < lc.hand_merge_distance_m)
-        )
+        # the nearer tracker takes: the other loses its support beside it; they have met if
+        # it was approaching the other before its miss (one that lost its candidate beside a
+        # still hand and slides onto it has not)
+        close = d[iu, ju] < lc.combine_distance_m
+        maybe = hands & (missing[iu] | missing[ju]) & (d[iu, ju] < lc.hand_merge_distance_m)
+        for k in np.flatnonzero(maybe & ~close):
+            a, b = cand[iu[k]], cand[ju[k]]
+            close[k] = any(self._came(x, y) for x, y in ((a, b), (b, a)) if x.misses > 0)
         pairs: dict[int, int] = {}
         drifted: set[int] = set()
         for k in np.flatnonzero(close)[np.argsort(d[iu, ju][close], kind="stable")]:
@@ -368,17 +377,39 @@ class MultiTargetTracker:
             if a.id in pairs or b.id in pairs or a.id in drifted or b.id in drifted:
                 continue
             bad = [tr for tr in (a, b) if tr.since_miss < lc.drift_window_frames]
+            met = hands[k] and any(self._came(x, y) for x, y in ((a, b), (b, a)) if x in bad)
             stray = [tr for tr in (a, b) if not tr.ever_labelled and tr.person == 0]
             if len(stray) == 1 and (a if stray[0] is b else b).person > 0:
                 # a tracker that never joined a person meets one that did: it is a duplicate
                 # of that target or a ghost beside it (mismatched blob pair), not a second
                 # target -- combining would hand the person's label to an empty pair
                 drifted.add(stray[0].id)
-            elif bad and not hands[k]:  # the one that missed most recently slid onto the other
+            elif bad and not met:  # the one that missed most recently slid onto the other
                 drifted.add(min(bad, key=lambda tr: (tr.since_miss, -tr.id)).id)
             else:
                 pairs[a.id], pairs[b.id] = b.id, a.id
         return pairs, drifted
+
+    def _came(self, a: _Track, b: _Track) -> bool:
+        """Whether a was approaching b at ``merge_closing_mps`` or faster before its latest
+        miss began (:meth:`_approach_mps`)."""
+        return self._approach_mps(a, b) >= self.cfg.lifecycle.merge_closing_mps
+
+    def _approach_mps(self, a: _Track, b: _Track) -> float:
+        """How fast a and b came closer in the last ``approach_window_s`` before a's latest
+        miss began, m/s: from the two trackers' estimate histories, not their velocity
+        estimates, whose noise alone exceeds ``merge_closing_mps`` now and then for two
+        still hands. -inf when the histories do not cover the window."""
+        hist_b = dict(b.history)
+        common = [(t, m, hist_b[t]) for t, m in a.history if t in hist_b and t <= a.miss_from_ns]
+        if not common:
+            return -np.inf
+        t1, a1, b1 = common[-1]
+        start = t1 - self.cfg.lifecycle.approach_window_s * 1e9
+        t0, a0, b0 = next(c for c in common if c[0] >= start)
+        if t1 <= t0:
+            return -np.inf
+        return float(np.linalg.norm(b0 - a0) - np.linalg.norm(b1 - a1)) / ((t1 - t0) * 1e-9)
 
     def _measure_separation(self, pts: np.ndarray, prior: np.ndarray, dt_s: float) -> None:
         """The modes of each combined pair's posterior, from the candidates it claims.
@@ -673,23 +704,18 @@ class MultiTargetTracker:
         coasted = last + coast_s[:, None] * np.array([tr.last_good_vel_mps for tr in lost])
         d = np.linalg.norm(coasted[:, None] - live_m[None], axis=2)
         gate = lc.hand_merge_distance_m + lc.reacquire_speed_mps * coast_s
-        towards = live_m[None] - last[:, None]
-        reach = np.linalg.norm(towards, axis=2)
-        rel_vel = (
-            np.array([tr.last_good_vel_mps for tr in lost])[:, None]
-            - np.array([tr.vel_mps for tr in live])[None]
-        )
-        closing = np.einsum("ijk,ijk->ij", rel_vel, towards) / np.maximum(reach, 1e-9)
-        ok = (d < gate[:, None]) & (reach <= lc.merge_reach_m) & (closing >= lc.merge_closing_mps)
-        if log.isEnabledFor(logging.DEBUG):
-            for i, j in zip(*np.nonzero(d < gate[:, None]), strict=True):
-                log.debug(
-                    "merge t%d->t%d: reach %.2f m, closing %.2f m/s",
-                    lost[i].id,
-                    live[j].id,
-                    reach[i, j],
-                    closing[i, j],
-                )
+        reach = np.linalg.norm(live_m[None] - last[:, None], axis=2)
+        ok = (d < gate[:, None]) & (reach <= lc.merge_reach_m)
+        for i, j in zip(*np.nonzero(d < gate[:, None]), strict=True):
+            closing = self._approach_mps(lost[i], live[j])
+            ok[i, j] &= closing >= lc.merge_closing_mps
+            log.debug(
+                "merge t%d->t%d: reach %.2f m, closing %.2f m/s",
+                lost[i].id,
+                live[j].id,
+                reach[i, j],
+                closing,
+            )
         d = np.where(ok, d, np.inf)
         out: dict[int, int] = {}
         taken: set[int] = set()

@@ -192,9 +192,14 @@ class LifecycleConfig:
     )
     merge_closing_mps: float = setting(
         0.3,
-        "... that it was approaching at least this fast when last supported (its velocity "
-        "relative to the other hand, along the line joining them), m/s",
+        "... that it was approaching at least this fast before its miss began (how much "
+        "closer the two came over approach_window_s); also required of a hand that combines "
+        "with another by hand_merge_distance_m or that comes within combine_distance_m of "
+        "another soon after a miss (one that slid onto a still hand has not met it), m/s",
         min=-1e9,
+    )
+    approach_window_s: float = setting(
+        0.3, "... measured over this long before the miss, s", min=0.0
     )
     retire_s: float = setting(
         3.0, "a labelled tracker lost for this long is retired (removed), s", min=0.0

@@ -659,3 +659,38 @@ def test_a_hand_taken_for_the_wrong_person_is_relabelled(rig, rng, revise_s):
     else:
         assert not revoked
         assert _owner_of(out[-1], b["right_hand"]).startswith("p1/")
+
+
+@pytest.mark.parametrize("closing_mps", [0.3, -1e9])
+def test_a_still_hand_that_loses_its_candidate_beside_another_has_not_met_it(
+    rig, rng, closing_mps
+):
+    """Two people hold their right hands out, 24 cm apart and still (the negative scene);
+    then a's candidate vanishes for ten frame sets. Its tracker, unsupported beside b's hand,
+    slides onto it, but a's hand was not approaching b's before its miss: no meeting, so no
+    combined state (and no handshake later). With the closing-speed guard off the two
+    combine."""
+    a, b = body((2.0, 2.0), 0.0), body((3.0, 2.0), 180.0)
+    held_a, held_b = np.array([2.38, 1.95, 1.05]), np.array([2.62, 1.97, 1.05])
+    rest = [a["head"], a["left_hand"], b["head"], b["left_hand"]]
+    frames = [[*rest, a["right_hand"], b["right_hand"]] for _ in range(40)]
+    for u in np.linspace(0, 1, 9)[1:]:
+        frames.append(
+            [
+                *rest,
+                a["right_hand"] + u * (held_a - a["right_hand"]),
+                b["right_hand"] + u * (held_b - b["right_hand"]),
+            ]
+        )
+    frames += [[*rest, held_a, held_b]] * 15 + [[*rest, held_b]] * 10
+    frames += [[*rest, held_a, held_b]] * 10
+    lc = LifecycleConfig(merge_closing_mps=closing_mps)
+    out = run(MultiTargetTracker(TrackingConfig(lifecycle=lc), rig, seed=13), frames, rng)
+    combined = [t for f in out for t in f.transitions if t.new is Phase.COMBINED]
+    if closing_mps > 0:
+        assert not combined
+        assert _owner_of(out[-1], held_a) == "p1/right_hand"
+        assert _owner_of(out[-1], held_b) == "p2/right_hand"
+        assert _owner_of(out[-1], a["head"]) == "p1/head"
+    else:
+        assert combined
