@@ -365,21 +365,25 @@ def make_candidates(
         ahead1 = np.einsum("ij,ij->i", points - o1, d1) > 0
         ahead2 = np.einsum("ij,ij->i", points - o2, d2) > 0
         geometric = ahead1 & ahead2 & (half_gap <= cfg.max_gap_m) & (points[:, 2] >= cfg.min_z_m)
-    # eq. 25 (relative v consistency) and eq. 26 (reconstruction error)
+    # eq. 26 (reconstruction error), then eq. 25 (relative v consistency) on its survivors:
+    # the floor rows of D_v take a projection per candidate
+    p_t = gauss_term(half_gap, cfg.sigma_gap_m)
+    keep = geometric & (p_t >= cfg.term_threshold) & (p_t >= cfg.prior_threshold)
+    ia, ib, points, half_gap, p_t = ia[keep], ib[keep], points[keep], half_gap[keep], p_t[keep]
     if cfg.rel_v_to_floor:
         d_v = [floor_relative_v(points, cam_all[g], *rows_all[g].T, rig) for g in (ia, ib)]
     else:
         d_v = [rel_v_all[ia], rel_v_all[ib]]
     p_o = gauss_term(d_v[0] - d_v[1], cfg.sigma_rel_v)
-    p_t = gauss_term(half_gap, cfg.sigma_gap_m)
-    keep = geometric & (p_o >= cfg.term_threshold) & (p_t >= cfg.term_threshold)
-    keep &= p_o * p_t >= cfg.prior_threshold  # p_b <= 1 cannot raise the product
+    keep = (p_o >= cfg.term_threshold) & (p_o * p_t >= cfg.prior_threshold)
+    # (p_b <= 1 cannot raise the product)
     if not keep.any():
         return _empty()
     ia, ib, points, half_gap = ia[keep], ib[keep], points[keep], half_gap[keep]
+    p_o, p_t = p_o[keep], p_t[keep]
     # eq. 27 (silhouette consistency) on the survivors only
     p_b = silhouette_prior(points, rig, by_cam, cfg.sigma_silhouette_px, cfg.silhouette_drop_worst)
-    prior = p_o[keep] * p_t[keep] * p_b  # eq. 19
+    prior = p_o * p_t * p_b  # eq. 19
     ok = (p_b >= cfg.term_threshold) & (prior >= cfg.prior_threshold)
     ia, ib, points, half_gap, prior = ia[ok], ib[ok], points[ok], half_gap[ok], prior[ok]
     if len(points) == 0:
