@@ -368,7 +368,8 @@ def make_candidates(
     # eq. 26 (reconstruction error), then eq. 25 (relative v consistency) on its survivors:
     # the floor rows of D_v take a projection per candidate
     p_t = gauss_term(half_gap, cfg.sigma_gap_m)
-    keep = geometric & (p_t >= cfg.term_threshold) & (p_t >= cfg.prior_threshold)
+    # p_o and p_b are at most 1: a pair whose p_t misses the prior threshold is lost already
+    keep = geometric & (p_t >= max(cfg.term_threshold, cfg.prior_threshold))
     ia, ib, points, half_gap, p_t = ia[keep], ib[keep], points[keep], half_gap[keep], p_t[keep]
     if cfg.rel_v_to_floor:
         d_v = [floor_relative_v(points, cam_all[g], *rows_all[g].T, rig) for g in (ia, ib)]
@@ -376,7 +377,6 @@ def make_candidates(
         d_v = [rel_v_all[ia], rel_v_all[ib]]
     p_o = gauss_term(d_v[0] - d_v[1], cfg.sigma_rel_v)
     keep = (p_o >= cfg.term_threshold) & (p_o * p_t >= cfg.prior_threshold)
-    # (p_b <= 1 cannot raise the product)
     if not keep.any():
         return _empty()
     ia, ib, points, half_gap = ia[keep], ib[keep], points[keep], half_gap[keep]

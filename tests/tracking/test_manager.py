@@ -666,10 +666,10 @@ def test_a_still_hand_that_loses_its_candidate_beside_another_has_not_met_it(
     rig, rng, closing_mps
 ):
     """Two people hold their right hands out, 24 cm apart and still (the negative scene);
-    then a's candidate vanishes for ten frame sets. Its tracker, unsupported beside b's hand,
-    slides onto it, but a's hand was not approaching b's before its miss: no meeting, so no
-    combined state (and no handshake later). With the closing-speed guard off the two
-    combine."""
+    then a's candidate vanishes for ten frame sets. a's hand was not approaching b's before
+    its miss, so they have not met: a's tracker is lost, not merged onto b's hand, and no
+    combined state opens (no handshake later); a's hand keeps its label when it shows again.
+    With the closing-speed guard off (and in session 10's tracker) the two combine."""
     a, b = body((2.0, 2.0), 0.0), body((3.0, 2.0), 180.0)
     held_a, held_b = np.array([2.38, 1.95, 1.05]), np.array([2.62, 1.97, 1.05])
     rest = [a["head"], a["left_hand"], b["head"], b["left_hand"]]
