@@ -706,7 +706,7 @@ class MultiTargetTracker:
         gate = lc.hand_merge_distance_m + lc.reacquire_speed_mps * coast_s
         reach = np.linalg.norm(live_m[None] - last[:, None], axis=2)
         ok = (d < gate[:, None]) & (reach <= lc.merge_reach_m)
-        for i, j in zip(*np.nonzero(d < gate[:, None]), strict=True):
+        for i, j in zip(*np.nonzero(ok), strict=True):
             closing = self._approach_mps(lost[i], live[j])
             ok[i, j] &= closing >= lc.merge_closing_mps
             log.debug(
