@@ -28,23 +28,10 @@ def _empty_blobs(shape: tuple[int, int]) -> BlobSet:
     )
 
 
-def _open(mask: np.ndarray, diameter_px: int, unopened_below_px: int = 0) -> np.ndarray:
+def _open(mask: np.ndarray, diameter_px: int) -> np.ndarray:
     """Morphological opening of a bool mask with an elliptical kernel, outside the frame
     counting as empty (computed on the mask's bounding box: the opening of empty space is
-    empty).
-
-    Regions of ``mask`` (8-connected) that the opening does not split into two or more
-    pieces and shrinks below ``unopened_below_px`` pixels keep their pixels unopened. The
-    opening is there to cut thin bridges (colour fringes along silhouette edges that join a
-    head and a hand into one blob); a region it does not split has no bridge to cut, and
-    opening a small one only erodes it below the blob size, or erases it whole when it is a
-    limb narrower than the kernel (a dark, thin hand at 4 m whose skin noise has scattered).
-
-    >>> m = np.zeros((12, 16), bool); m[1:6, 1:6] = True; m[1:6, 9:14] = True
-    >>> m[3, 6:9] = True; m[8, 2:10] = True  # a bridge, and a thin line
-    >>> int(m.sum()), int(_open(m, 3).sum()), int(_open(m, 3, unopened_below_px=16).sum())
-    (61, 44, 52)
-    """
+    empty)."""
     x, y, w, h = cv2.boundingRect(mask.view(np.uint8))
     out = np.zeros_like(mask)
     if w and h:
@@ -53,15 +40,7 @@ def _open(mask: np.ndarray, diameter_px: int, unopened_below_px: int = 0) -> np.
         opened = cv2.morphologyEx(
             crop, cv2.MORPH_OPEN, kernel, borderType=cv2.BORDER_CONSTANT, borderValue=0
         )
-        kept = opened > 0
-        if unopened_below_px > 0:
-            n, regions = cv2.connectedComponents(crop, connectivity=8)
-            n_pieces, pieces = cv2.connectedComponents(opened, connectivity=8)
-            pairs = np.unique(regions[kept].astype(np.int64) * n_pieces + pieces[kept])
-            split = np.bincount(pairs // n_pieces, minlength=n) >= 2
-            small = np.bincount(regions[kept], minlength=n) < unopened_below_px
-            kept = np.where(split[regions] | ~small[regions], kept, crop > 0)
-        out[y : y + h, x : x + w] = kept
+        out[y : y + h, x : x + w] = opened > 0
     return out
 
 
@@ -167,7 +146,7 @@ def extract_blobs(
     # 320x240 (hands ~6 px) a 3-px opening would erase them
     radius_px = round((cfg.open_px - 1) / 2 * shape[1] / REFERENCE_WIDTH_PX)
     if radius_px > 0:
-        inside = _open(inside, 2 * radius_px + 1, cfg.unopened_below_px)
+        inside = _open(inside, 2 * radius_px + 1)
     n_all, labels, stats, centroids = components_with_stats(inside)
     areas = stats[1:, cv2.CC_STAT_AREA].astype(np.int64)
     ok = np.flatnonzero(areas >= max(cfg.min_blob_area_px, 1))

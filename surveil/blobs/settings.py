@@ -108,10 +108,3 @@ class BlobConfig:
         "heads and hands into one blob",
         min=0,
     )
-    unopened_below_px: int = setting(
-        0,
-        "skin regions that the opening does not split and shrinks below this many pixels "
-        "keep their pixels unopened (thin or noise-speckled limbs: a dark hand at 4 m); "
-        "0 = open every region",
-        min=0,
-    )
