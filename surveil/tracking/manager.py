@@ -82,6 +82,8 @@ class _Track:
     type_llr: float = 0.0
     typed_frames: int = 0
     speed_ema_mps: float = 0.0
+    support_ema: float = 0.0  # smoothed likelihood level (a ghost's is lower: fewer views)
+    contest_ns: int | None = None  # since when it out-supports a hand holding a slot
     partner: int | None = None
     body_fails: int = 0  # frame sets in which it failed the body check (a head candidate)
     before_vec_m: np.ndarray | None = None
@@ -315,6 +317,8 @@ class MultiTargetTracker:
             tr.history.append((self._last_t_ns, tr.mean_m.copy()))
             a = self.cfg.labelling.evidence_alpha
             tr.speed_ema_mps = (1 - a) * tr.speed_ema_mps + a * float(np.linalg.norm(tr.vel_mps))
+            b = self.cfg.labelling.contest_alpha if len(tr.history) > 1 else 1.0
+            tr.support_ema = (1 - b) * tr.support_ema + b * tr.level
 
     def _pooled_update(
         self,
@@ -806,6 +810,7 @@ class MultiTargetTracker:
                     tr.is_hand = True
         self._detach_astray(t_ns)
         self._attach_hands(t_ns)
+        self._contest_slots(t_ns)
         self._update_facing()
         self._decide_sides(t_ns)
         self._revise_sides(t_ns)
@@ -888,15 +893,102 @@ class MultiTargetTracker:
         persons, heads = self._live_heads()
         if not persons:
             return
-        for tr in self._tracks.values():
+        for tr in list(self._tracks.values()):
             if not (tr.is_hand and tr.person == 0 and tr.phase is Phase.UNLABELLED):
                 continue
             n_hands = np.array([len(p.hand_ids) for p in persons])
             k = lab.nearest_person(tr.mean_m, heads, n_hands, self.cfg.labelling)
+            if k < 0:
+                k = self._yield_lost_slot(tr, persons, heads, t_ns)
             if k >= 0:
                 persons[k].hand_ids.append(tr.id)
                 tr.person = persons[k].number
                 tr.attached_ns = t_ns
+
+    def _contest_slots(self, t_ns: int) -> None:
+        """Give a hand slot to an unlabelled hand tracker that has out-supported the slot's
+        holder for ``contest_s``: its smoothed likelihood level (``support_ema``) exceeds the
+        holder's by ``contest_margin`` or more. The holder is the nearest of the person's
+        normal hands that the challenger out-supports; it loses its label and the challenger
+        takes it (same person, same side). A ghost -- two views' lines of sight of different
+        limbs that cross near the body -- is supported by one camera pair, a real hand by
+        most pairs, whose candidates merge into a stronger one (pick_place: a ghost at hip
+        height held the right hand's label at level ~0.6 while the real right hand, at ~0.9,
+        stayed unlabelled through the pick)."""
+        lcfg = self.cfg.labelling
+        if lcfg.contest_s <= 0:
+            return
+        persons, heads = self._live_heads()
+        if not persons:
+            return
+        for c in list(self._tracks.values()):
+            if not (c.is_hand and c.person == 0 and c.phase is Phase.UNLABELLED):
+                c.contest_ns = None
+                continue
+            k = lab.nearest_person(c.mean_m, heads, np.zeros(len(persons), int), lcfg)
+            p = persons[k] if k >= 0 else None
+            held = [
+                self._tracks[h]
+                for h in (p.hand_ids if p is not None else [])
+                if self._tracks[h].phase is Phase.NORMAL
+                and c.support_ema - self._tracks[h].support_ema >= lcfg.contest_margin
+            ]
+            if p is None or len(p.hand_ids) < 2 or not held:
+                c.contest_ns = None
+                continue
+            if c.contest_ns is None:
+                c.contest_ns = t_ns
+            if (t_ns - c.contest_ns) * 1e-9 < lcfg.contest_s:
+                continue
+            h = min(held, key=lambda h: float(np.linalg.norm(h.mean_m - c.mean_m)))
+            log.debug(
+                "t%d (support %.2f) takes %s from t%d (support %.2f)",
+                c.id,
+                c.support_ema,
+                h.label,
+                h.id,
+                h.support_ema,
+            )
+            p.hand_ids[p.hand_ids.index(h.id)] = c.id
+            c.person, c.limb, c.attached_ns, c.contest_ns = p.number, h.limb, t_ns, None
+            h.person, h.limb, h.attached_ns, h.astray_ns = 0, Limb.UNKNOWN, None, None
+
+    def _yield_lost_slot(
+        self, tr: _Track, persons: list[_Person], heads: np.ndarray, t_ns: int
+    ) -> int:
+        """Index (in ``persons``) of the person whose hand, lost for ``yield_lost_s`` or
+        longer, gives its slot to the unlabelled hand ``tr`` (-1: none): ``tr`` would join
+        that person (:func:`lab.nearest_person`) but for the lost hand. The lost tracker is
+        retired: its target is the one ``tr`` now tracks (a person has two hands), and it
+        could re-acquire only within its gate around its last position, which its person
+        has walked away from (pick_place: both hands lost at the table, the person carrying
+        the box to the cabinet with their hands tracked by new, unlabelled trackers)."""
+        wait_s = self.cfg.labelling.yield_lost_s
+        if wait_s <= 0:
+            return -1
+
+        def stale(hid: int) -> bool:
+            h = self._tracks.get(hid)
+            return (
+                h is not None
+                and h.phase is Phase.LOST
+                and h.lost_since_ns is not None
+                and (t_ns - h.lost_since_ns) * 1e-9 >= wait_s
+            )
+
+        held = np.array([sum(not stale(h) for h in p.hand_ids) for p in persons])
+        k = lab.nearest_person(tr.mean_m, heads, held, self.cfg.labelling)
+        if k < 0:
+            return -1
+        p = persons[k]
+        lost = sorted(
+            (h for h in p.hand_ids if stale(h)), key=lambda h: self._tracks[h].lost_since_ns
+        )
+        while len(p.hand_ids) >= 2 and lost:
+            gone = lost.pop(0)
+            log.debug("t%d (%s) lost: its slot goes to t%d", gone, self._tracks[gone].label, tr.id)
+            self._remove(gone)
+        return k
 
     def _update_facing(self) -> None:
         lcfg = self.cfg.labelling

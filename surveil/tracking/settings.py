@@ -296,6 +296,24 @@ class LabellingConfig:
         "for this long loses its label and is attached anew (0 = never), s",
         min=0.0,
     )
+    contest_s: float = setting(
+        0.5,
+        "an unlabelled hand tracker that out-supports one of a person's hands this long takes "
+        "its slot (0 = never), s",
+        min=0.0,
+    )
+    contest_margin: float = setting(
+        0.2, "... by this much smoothed likelihood level (0-1)", min=0.0
+    )
+    contest_alpha: float = setting(
+        0.1, "weight of the newest frame in the smoothed likelihood level", min=0.01, max=1.0
+    )
+    yield_lost_s: float = setting(
+        0.5,
+        "a person's hand lost this long gives its slot to an unlabelled hand tracker that "
+        "would join the person but for it; the lost tracker is retired (0 = never), s",
+        min=0.0,
+    )
     duplicate_head_m: float = setting(
         0.3,
         "a head-like target this close (horizontally) to a known head is not a head, m",
