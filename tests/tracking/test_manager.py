@@ -694,3 +694,59 @@ def test_a_still_hand_that_loses_its_candidate_beside_another_has_not_met_it(
         assert _owner_of(out[-1], a["head"]) == "p1/head"
     else:
         assert combined
+
+
+@pytest.mark.parametrize("yield_s", [0.5, 0.0])
+def test_hands_lost_while_their_person_walks_away_give_their_slots_to_new_trackers(
+    rig, rng, yield_s
+):
+    """A person's hands lose their candidates (carrying a box against the body) while the
+    head walks 1.5 m away in 2 s; the hands show again at the new place, far outside the lost
+    trackers' re-acquisition gate, so new trackers start there. The lost hands give their
+    slots to them after yield_lost_s and are retired: the new trackers become p1's hands.
+    With 0 (never), the lost hands hold the slots until they retire (retire_s, 3 s) and the
+    new trackers stay unlabelled."""
+    a = body((1.5, 2.0), 0.0)
+    frames = [[a["head"], a["left_hand"], a["right_hand"]] for _ in range(40)]
+    shift = np.array([1.5, 0.0, 0.0])
+    for u in (1 - np.cos(np.pi * np.linspace(0, 1, 31)[1:])) / 2:  # 2 s, at most 1.2 m/s
+        frames.append([a["head"] + u * shift])
+    frames += [[a["head"] + shift, a["left_hand"] + shift, a["right_hand"] + shift]] * 12
+    cfg = TrackingConfig(labelling=LabellingConfig(yield_lost_s=yield_s))
+    out = run(MultiTargetTracker(cfg, rig, seed=14), frames, rng)
+    assert _owner_of(out[39], a["right_hand"]) == "p1/right_hand"
+    last = out[-1]
+    if yield_s > 0:
+        assert _owner_of(last, a["left_hand"] + shift) == "p1/left_hand"
+        assert _owner_of(last, a["right_hand"] + shift) == "p1/right_hand"
+        assert len(last.targets) == 3  # the lost trackers are retired
+    else:
+        assert not _owner_of(last, a["right_hand"] + shift).startswith("p1/")
+
+
+@pytest.mark.parametrize("contest_s", [0.5, 0.0])
+def test_a_real_hand_takes_its_slot_from_a_weaker_ghost(rig, contest_s):
+    """A ghost candidate beside the right hand (two views' lines of sight crossing; prior 0.5) holds
+    the right hand's slot while the real right hand is hidden. When the real hand shows
+    (prior 0.95, from several camera pairs) its tracker out-supports the ghost's and takes
+    the label after contest_s; with 0 (never) the ghost keeps it."""
+    rng = np.random.default_rng(5)
+    a = body((2.0, 2.0), 0.0)
+    ghost = a["right_hand"] + 0.15 * a["fwd"] + 0.1 * a["left"]  # 18 cm from the real hand
+
+    def frame(points, priors) -> CandidateSet:
+        pts = np.array(points) + rng.normal(0, 0.005, (len(points), 3))
+        return CandidateSet(pts, np.array(priors))
+
+    seen = [a["head"], a["left_hand"], ghost]
+    sets = [frame(seen, [0.95, 0.95, 0.5]) for _ in range(40)]
+    sets += [frame([*seen, a["right_hand"]], [0.95, 0.95, 0.5, 0.95]) for _ in range(30)]
+    cfg = TrackingConfig(labelling=LabellingConfig(contest_s=contest_s))
+    trk = MultiTargetTracker(cfg, rig, seed=15)
+    out = [trk.step(i * DT_NS, c) for i, c in enumerate(sets)]
+    assert _owner_of(out[39], ghost) == "p1/right_hand"
+    if contest_s > 0:
+        assert _owner_of(out[-1], a["right_hand"]) == "p1/right_hand"
+        assert not _owner_of(out[-1], ghost).startswith("p1/")
+    else:
+        assert _owner_of(out[-1], ghost) == "p1/right_hand"
