@@ -726,8 +726,8 @@ def test_hands_lost_while_their_person_walks_away_give_their_slots_to_new_tracke
 
 @pytest.mark.parametrize("contest_s", [0.5, 0.0])
 def test_a_real_hand_takes_its_slot_from_a_weaker_ghost(rig, contest_s):
-    """A ghost candidate beside the right hand (two views' lines of sight crossing; prior 0.5) holds
-    the right hand's slot while the real right hand is hidden. When the real hand shows
+    """A ghost candidate beside the right hand (two views' lines of sight crossing; prior
+    0.5) holds the right hand's slot while the real right hand is hidden. When it shows
     (prior 0.95, from several camera pairs) its tracker out-supports the ghost's and takes
     the label after contest_s; with 0 (never) the ghost keeps it."""
     rng = np.random.default_rng(5)
