@@ -102,6 +102,10 @@ class _Track:
     def labelled(self) -> bool:
         return self.person > 0 and self.limb is not Limb.UNKNOWN
 
+    def take_label_off(self) -> None:
+        """Back to no person and no limb (the caller frees its person's slot)."""
+        self.person, self.limb, self.attached_ns, self.astray_ns = 0, Limb.UNKNOWN, None, None
+
 
 @dataclass(slots=True, eq=False)
 class _Person:
@@ -887,7 +891,7 @@ class MultiTargetTracker:
                     "t%d (%s) is out of p%d's reach: label taken off", h.id, h.label, p.number
                 )
                 p.hand_ids.remove(hid)
-                h.person, h.limb, h.attached_ns, h.astray_ns = 0, Limb.UNKNOWN, None, None
+                h.take_label_off()
 
     def _attach_hands(self, t_ns: int) -> None:
         persons, heads = self._live_heads()
@@ -951,7 +955,7 @@ class MultiTargetTracker:
             )
             p.hand_ids[p.hand_ids.index(h.id)] = c.id
             c.person, c.limb, c.attached_ns, c.contest_ns = p.number, h.limb, t_ns, None
-            h.person, h.limb, h.attached_ns, h.astray_ns = 0, Limb.UNKNOWN, None, None
+            h.take_label_off()
 
     def _yield_lost_slot(
         self, tr: _Track, persons: list[_Person], heads: np.ndarray, t_ns: int
