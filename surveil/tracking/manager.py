@@ -225,7 +225,7 @@ class MultiTargetTracker:
         merged = self._merge_lost(t_ns, reacquired, pairs, seeds)
         parted = self._split_on_seeds(seeds, set(reacquired.values()))
         rel_v = self._candidate_rel_v(candidates, observations)
-        self._label(pts, rel_v, t_ns, observations or {})
+        self._label(pts, rel_v, t_ns, observations or {}, set(reacquired) | set(merged))
         transitions = self._advance_phases(t_ns, pairs, drifted, reacquired, merged)
         transitions += self._initialise(seeds, set(reacquired.values()) | parted, t_ns)
         return self._frame(t_ns, transitions)
@@ -775,7 +775,9 @@ class MultiTargetTracker:
         cand_rel_v: np.ndarray,
         t_ns: int,
         observations: Mapping[str, CameraObservation],
+        returning: set[int],
     ) -> None:
+        """``returning``: lost trackers re-acquired in this frame set (they keep their slots)."""
         lcfg = self.cfg.labelling
         act = [tr for tr in self._tracks.values() if tr.phase in ACTIVE]
         if not act:
@@ -813,7 +815,7 @@ class MultiTargetTracker:
                 elif tr.type_llr <= -lcfg.decide_llr:
                     tr.is_hand = True
         self._detach_astray(t_ns)
-        self._attach_hands(t_ns)
+        self._attach_hands(t_ns, returning)
         self._contest_slots(t_ns)
         self._update_facing()
         self._decide_sides(t_ns)
@@ -893,7 +895,7 @@ class MultiTargetTracker:
                 p.hand_ids.remove(hid)
                 h.take_label_off()
 
-    def _attach_hands(self, t_ns: int) -> None:
+    def _attach_hands(self, t_ns: int, returning: set[int]) -> None:
         persons, heads = self._live_heads()
         if not persons:
             return
@@ -903,7 +905,7 @@ class MultiTargetTracker:
             n_hands = np.array([len(p.hand_ids) for p in persons])
             k = lab.nearest_person(tr.mean_m, heads, n_hands, self.cfg.labelling)
             if k < 0:
-                k = self._yield_lost_slot(tr, persons, heads, t_ns)
+                k = self._yield_lost_slot(tr, persons, heads, t_ns, returning)
             if k >= 0:
                 persons[k].hand_ids.append(tr.id)
                 tr.person = persons[k].number
@@ -958,7 +960,12 @@ class MultiTargetTracker:
             h.take_label_off()
 
     def _yield_lost_slot(
-        self, tr: _Track, persons: list[_Person], heads: np.ndarray, t_ns: int
+        self,
+        tr: _Track,
+        persons: list[_Person],
+        heads: np.ndarray,
+        t_ns: int,
+        returning: set[int],
     ) -> int:
         """Index (in ``persons``) of the person whose hand, lost for ``yield_lost_s`` or
         longer, gives its slot to the unlabelled hand ``tr`` (-1: none): ``tr`` would join
@@ -966,7 +973,8 @@ class MultiTargetTracker:
         retired: its target is the one ``tr`` now tracks (a person has two hands), and it
         could re-acquire only within its gate around its last position, which its person
         has walked away from (pick_place: both hands lost at the table, the person carrying
-        the box to the cabinet with their hands tracked by new, unlabelled trackers)."""
+        the box to the cabinet with their hands tracked by new, unlabelled trackers). A lost
+        hand re-acquired in this frame set (``returning``) keeps its slot."""
         wait_s = self.cfg.labelling.yield_lost_s
         if wait_s <= 0:
             return -1
@@ -975,6 +983,7 @@ class MultiTargetTracker:
             h = self._tracks.get(hid)
             return (
                 h is not None
+                and hid not in returning
                 and h.phase is Phase.LOST
                 and h.lost_since_ns is not None
                 and (t_ns - h.lost_since_ns) * 1e-9 >= wait_s
