@@ -185,6 +185,8 @@ class Pipeline:
             carry = self.carry.step(fs.t_ns, fs.images, observations, track.targets)
         t3 = time.perf_counter()
         events = tuple(self.activity.step(track, carry))
+        for hand_id in self.activity.released_hands:
+            self.carry.restart(hand_id)
         t4 = time.perf_counter()
         timings.update(
             candidates=1000 * (t1 - t0),

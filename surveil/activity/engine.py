@@ -25,6 +25,10 @@ or more from the still point at most ``max_approach_s`` before): the ballistic r
 §7.3.1. Climax = the moment the hand stopped; "before" = the carry estimate at the start of the
 reach; "after" = the estimate ``separation_delay_s`` after the hand is ``separation_m`` from the
 still point again (the return), or at ``separation_timeout_s`` after the stop was detected.
+The hand's id is then listed in :attr:`ActivityEngine.released_hands` for that step: the pipeline
+restarts its carry window (:meth:`~surveil.carry.CarryAnalyser.restart`), as the carry stage
+itself does when two hands separate, so "after" holds only frames from the return, not the
+object the hand left or took up a moment before.
 
 At the post-separation point every enabled rule whose limbs, persons, carry states and transfer
 match fires an :class:`~surveil.datatypes.ActivityEvent`, emitted by that :meth:`step`:
@@ -190,6 +194,13 @@ class ActivityEngine:
         # (rule, hand) -> last still point; re-armed when the hand is separation_m from it
         self._still_disarmed: dict[tuple[str, int], np.ndarray] = {}
         self._last_t_ns: int | None = None
+        self._released: list[int] = []
+
+    @property
+    def released_hands(self) -> tuple[int, ...]:
+        """Hand tracker ids that left a still point (pick / place) at the last :meth:`step`:
+        what they hold from now on is "after"; their carry windows should restart."""
+        return tuple(self._released)
 
     # -----------------------------------------------------------------------------------------
     # public API
@@ -221,6 +232,7 @@ class ActivityEngine:
                 "call reset() to start a new stream"
             )
         self._last_t_ns = t
+        self._released = []
         cur = _Frame(
             t,
             {s.target_id: s for s in frame.targets},
@@ -615,6 +627,8 @@ class ActivityEngine:
             if st.apart_ns is None and snap is not None:
                 if float(np.linalg.norm(snap.mean_m - st.point_m)) >= th.separation_m:
                     st.apart_ns = t
+                    if st.hand_id not in self._released:
+                        self._released.append(st.hand_id)
             ready = (
                 st.apart_ns is not None
                 and t - st.apart_ns >= _ns(th.separation_delay_s)

@@ -530,6 +530,14 @@ class CarryAnalyser:
         state = self._hands.get(target_id)
         return state is not None and state.frozen
 
+    def restart(self, target_id: int) -> None:
+        """Empty a hand's window (no-op for unknown ids): what it held until now is no longer
+        evidence, e.g. once it left the point where it put down or took up an object."""
+        state = self._hands.get(target_id)
+        if state is not None:
+            state.window.clear()
+            log.debug("carry: hand %d window restarted on request", target_id)
+
     def step(
         self,
         t_ns: int,

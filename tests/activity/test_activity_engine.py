@@ -177,6 +177,26 @@ def test_place_waits_for_carry_evidence_from_after_the_hand_left(rules):
     assert ev.end_ns >= 2.6 * S
 
 
+def test_a_hand_leaving_its_still_point_is_released_once(rules):
+    """The pipeline restarts the carry window of a hand that leaves its still point (the
+    reach in ``reach`` stops at 1.1-1.6 s, then returns): the engine names it once, at the
+    first frame set 0.3 m (separation_m) from the point."""
+    engine = ActivityEngine(rules)
+    script = reach(switch(1.35, holding(BLUE), empty()))
+    point = np.array([0.6, -0.2, 0.95])
+    released = []
+    for frame, carry in script.stream():
+        engine.step(frame, carry)
+        if engine.released_hands:
+            released.append((frame.t_ns, engine.released_hands))
+    assert len(released) == 1
+    t_ns, ids = released[0]
+    assert ids == (3,)
+    at = {s.target_id: s.mean_m for s in script.frame(t_ns / S)[0]}
+    before = {s.target_id: s.mean_m for s in script.frame(t_ns / S - 1 / 15)[0]}
+    assert np.linalg.norm(at[3] - point) >= 0.3 > np.linalg.norm(before[3] - point)
+
+
 def test_receiving_hand_that_stops_after_an_exchange_is_not_a_pick(rules):
     """The receiver's hand parts from the giver's, moves on a little and stops away from the
     body. Its reach is the pair's, seen through the combined state, and its carry estimate

@@ -205,6 +205,20 @@ def test_window_freezes_while_hands_overlap_and_restarts_after(camera):
     assert after.since_ns == 25 * NS  # its evidence starts at the separation
 
 
+def test_restart_drops_what_the_window_held(camera):
+    """A hand that put its box down and moved away: restarted, its window holds only the
+    frames from then on, so the box it held a moment ago no longer counts."""
+    analyser = CarryAnalyser(CarryConfig(), Rig((camera,)))
+    a = hand_target()
+    assert run(analyser, [make_frame(camera)] * 5, [a])[1].carrying
+    stale = run(analyser, [make_frame(camera, box=False)] * 2, [a], t0=5 * NS)[1]
+    assert stale.carrying and stale.since_ns == 0  # the 1 s window still holds the box
+    analyser.restart(1)
+    analyser.restart(99)  # unknown ids are ignored
+    fresh = run(analyser, [make_frame(camera, box=False)] * 2, [a], t0=7 * NS)[1]
+    assert not fresh.carrying and fresh.since_ns == 7 * NS
+
+
 def make_two_hands(camera, left_m, right_m):
     """One person, both hands stretched out and each next to a green patch (a green dress
     seen around both hands)."""
