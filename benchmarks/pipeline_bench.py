@@ -61,6 +61,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     names = args.names or sorted(p.stem for p in (ROOT / "recordings").glob("*.toml"))
     track_rows, event_rows = [], []
+    n_true = n_pred = n_matched = n_dir = n_dir_ok = 0
     for name in names:
         report, summary, rate = bench(name, args.out, args.seed, args.config)
         t, e = report.targets, report.events
@@ -78,11 +79,15 @@ def main(argv: list[str] | None = None) -> int:
                 event_rows.append(
                     f"| {name} | {a.activity} | {a.n_true} | {a.n_pred} | {a.n_matched} "
                     f"| {_f(a.precision)} | {_f(a.recall)} | {_f(a.f1)} "
-                    f"| {_f(a.climax_error_ms_median, 0)} |"
+                    f"| {_f(a.climax_error_ms_median, 0)} | {_f(a.direction_accuracy)} |"
                 )
+            if a.direction_accuracy is not None:  # matched events with a true giver
+                n_dir += a.n_matched
+                n_dir_ok += round(a.direction_accuracy * a.n_matched)
+        n_true, n_pred, n_matched = n_true + e.n_true, n_pred + e.n_pred, n_matched + e.n_matched
         event_rows.append(
             f"| {name} | all (micro) | {e.n_true} | {e.n_pred} | {e.n_matched} "
-            f"| {_f(e.precision)} | {_f(e.recall)} | {_f(e.f1)} | |"
+            f"| {_f(e.precision)} | {_f(e.recall)} | {_f(e.f1)} | | |"
         )
         print(track_rows[-1], file=sys.stderr, flush=True)
     print(
@@ -93,9 +98,21 @@ def main(argv: list[str] | None = None) -> int:
     print("|---|---|---|---|---|---|---|---|---|---|---|")
     print("\n".join(track_rows))
     print()
-    print("| scenario | activity | true | predicted | matched | P | R | F1 | climax ms median |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print(
+        "| scenario | activity | true | predicted | matched | P | R | F1 | climax ms median "
+        "| direction |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|---|")
     print("\n".join(event_rows))
+    print()
+    print(
+        f"Over the scenarios above: {n_matched} of {n_true} true events recognised, "
+        f"{n_pred} predicted; "
+        f"P {_f(n_matched / n_pred if n_pred else None)}, "
+        f"R {_f(n_matched / n_true if n_true else None)}, "
+        f"F1 {_f(2 * n_matched / (n_true + n_pred) if n_true + n_pred else None)}; "
+        f"exchange direction right in {n_dir_ok} of {n_dir} recognised exchanges."
+    )
     return 0
 
 
