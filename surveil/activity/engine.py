@@ -7,7 +7,8 @@ trackers enter the combined state together (a ``Transition`` with ``new is COMBI
 estimates come closer than the rule's ``coincidence_m`` (so hand/head contacts count even when
 the tracker keeps them apart; if the tracker combines them later, its join becomes the climax).
 The limbs' labels from before the join and the carry estimates at the first contact ("before";
-the carry stage freezes estimates while hands overlap) are kept. The
+the carry stage freezes estimates while hands overlap; a hand whose estimate there is not
+confident takes its latest confident one of the ``max_approach_s`` before) are kept. The
 episode is separated by the combined -> unlabelled transition (or, if it never combined, when
 the distance exceeds ``coincidence_m`` again). The **post-separation point** is
 the first frame set at least ``separation_delay_s`` after the two targets are ``separation_m``
@@ -290,6 +291,24 @@ class ActivityEngine:
                 return fr.carry[target_id]
         return None
 
+    def _confident_carry(
+        self, target_id: int, t_ns: int, since_ns: int, min_confidence: float
+    ) -> CarryEstimate | None:
+        """The latest estimate at or before ``t_ns`` that is confident, looking back to
+        ``since_ns``; else the latest one. A hand's estimate can lose confidence in the last
+        half second before contact (its tracker lags the fast approach and the region misses
+        the object; the other hand's circle crowds it); what it held confidently on the
+        approach is what it carried."""
+        for fr in reversed(self._frames):
+            if fr.t_ns > t_ns:
+                continue
+            if fr.t_ns < since_ns:
+                break
+            est = fr.carry.get(target_id)
+            if est is not None and est.confidence >= min_confidence:
+                return est
+        return self._latest_carry(target_id, t_ns)
+
     def _carry_since(self, target_id: int, t_ns: int, since_ns: int) -> CarryEstimate | None:
         """The latest estimate at or before ``t_ns`` if its evidence all dates from
         ``since_ns`` or later (else None): after a pick or place the fusion window still
@@ -341,13 +360,16 @@ class ActivityEngine:
         key = (rule.name, frozenset(ids))
         if not _orders(rule, labels) or not _persons_ok(rule, labels):
             return
-        before = (self._latest_carry(ids[0], t_ns), self._latest_carry(ids[1], t_ns))
+        th = rule.thresholds
+        start = self._approach_start(ids, t_ns, rule)
+        since = t_ns - _ns(th.max_approach_s)
+        before = tuple(self._confident_carry(i, t_ns, since, th.min_confidence) for i in ids)
         self._pairs[key] = _PairEpisode(
             rule=rule,
             ids=list(ids),
             labels=labels,
             climax_ns=t_ns,
-            start_ns=self._approach_start(ids, t_ns, rule),
+            start_ns=start,
             before=before,
             combined=combined,
         )

@@ -121,6 +121,24 @@ def test_exchange_between_two_people_either_direction(rules, giver):
     assert ev.persons == tuple(sorted({src[:2], dst[:2]}, key=lambda p: p != src[:2]))
 
 
+@pytest.mark.parametrize("faded_s", [0.4, 2.5])
+def test_giver_whose_estimate_fades_just_before_contact_still_gives(rules, faded_s):
+    """The giver's tracker lags its hand on the fast approach and its carry confidence falls
+    below min_confidence (0.3) for the last 0.4 s before the join at 1.0 s: its latest
+    confident estimate of the max_approach_s (2 s) before counts as "before". If it was never
+    confident in those 2 s (faded 2.5 s before), "before" is unknown and nothing fires."""
+    gives = switch(1.0 - faded_s, holding(GREEN), switch(1.2, holding(GREEN, conf=0.2), empty()))
+    takes = switch(1.2, empty(), holding(GREEN))
+    script = two_people(gives, takes)
+    script.duration_s = 4.0
+    events = run(rules, script.stream())
+    if faded_s < 2.0:
+        assert [e.activity for e in events] == ["exchange"]
+        assert (events[0].from_actor, events[0].to_actor) == ("p1/right_hand", "p2/right_hand")
+    else:
+        assert events == []
+
+
 def test_self_exchange_between_own_hands(rules):
     events = run(
         rules,
