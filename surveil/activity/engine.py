@@ -26,7 +26,8 @@ or more from the still point at most ``max_approach_s`` before): the ballistic r
 §7.3.1. Climax = the moment the hand stopped; "before" = the carry estimate at the start of the
 reach; "after" = the estimate ``separation_delay_s`` after the hand is ``separation_m`` from the
 still point again (the return), or at ``separation_timeout_s`` after the stop was detected.
-The hand's id is then listed in :attr:`ActivityEngine.released_hands` for that step: the pipeline
+At the step where the hand is ``separation_m`` from the still point, its id is listed in
+:attr:`ActivityEngine.released_hands`: the pipeline
 restarts its carry window (:meth:`~surveil.carry.CarryAnalyser.restart`), as the carry stage
 itself does when two hands separate, so "after" holds only frames from the return, not the
 object the hand left or took up a moment before.
