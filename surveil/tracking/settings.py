@@ -347,7 +347,10 @@ class LabellingConfig:
         1.0, "... for this long before the two hands' sides are swapped, s", min=0.0
     )
     walk_speed_mps: float = setting(
-        0.3, "head speed above which the walking direction is facing evidence, m/s", min=0.0
+        0.6,
+        "head speed above which the walking direction is facing evidence, m/s (the filter's "
+        "velocity of a standing head exceeds 0.3 m/s in 1-3 % of frames; docs/tracking.md)",
+        min=0.0,
     )
     social_weight: float = setting(
         0.05, "facing evidence per frame towards the nearest other person's head", min=0.0

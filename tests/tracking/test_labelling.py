@@ -55,6 +55,16 @@ def test_facing_cues_walking_and_social():
     assert walk[1] > 0 and walk[0] == 0
     social = lab.facing_cues(head, np.zeros(3), np.zeros((0, 3)), np.array([[-1.0, 0, 1.6]]), CFG)
     assert social[0] < 0 and social[1] == 0
+    # a standing head's filter velocity jitters up to ~0.4 m/s (a new tracker's most of all):
+    # that is not walking, or a person facing away would get their hands swapped
+    jitter = lab.facing_cues(
+        head, np.array([0.4, 0.1, 0]), np.zeros((0, 3)), np.zeros((0, 3)), CFG
+    )
+    assert np.allclose(jitter, 0)
+    slow_walk = lab.facing_cues(
+        head, np.array([0.7, 0, 0]), np.zeros((0, 3)), np.zeros((0, 3)), CFG
+    )
+    assert slow_walk[0] > 0
     # hands hanging at the sides give no evidence
     rest = np.array([[0.0, 0.25, 0.8], [0.0, -0.25, 0.8]])
     assert np.allclose(lab.facing_cues(head, np.zeros(3), rest, np.zeros((0, 3)), CFG), 0)
