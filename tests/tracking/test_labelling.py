@@ -55,8 +55,8 @@ def test_facing_cues_walking_and_social():
     assert walk[1] > 0 and walk[0] == 0
     social = lab.facing_cues(head, np.zeros(3), np.zeros((0, 3)), np.array([[-1.0, 0, 1.6]]), CFG)
     assert social[0] < 0 and social[1] == 0
-    # a standing head's filter velocity jitters up to ~0.4 m/s (a new tracker's most of all):
-    # that is not walking, or a person facing away would get their hands swapped
+    # a standing head's filter speed passes 0.3 m/s in 1-3 % of frames (docs/tracking.md):
+    # that is not walking, or a person facing the other way gets their hands swapped
     jitter = lab.facing_cues(
         head, np.array([0.4, 0.1, 0]), np.zeros((0, 3)), np.zeros((0, 3)), CFG
     )
