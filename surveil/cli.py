@@ -467,7 +467,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--no-blobs",
         action="store_true",
-        help="do not recompute silhouettes and skin blobs (faster)",
+        help="do not recompute silhouettes, skin blobs and carry estimates (faster)",
     )
     p.set_defaults(command=cmd_review)
 

@@ -41,11 +41,12 @@ facing_deg = 180
 skin = "light"
 shirt = "red"
 
+# 14 cm: at 320x240 a 9 cm ball shows too few pixels for the carry analysis
 [[objects]]
 name = "ball"
 shape = "ball"
 hue_deg = 120
-size_m = [0.09, 0.09, 0.09]
+size_m = [0.14, 0.14, 0.14]
 held_by = "p1/right_hand"
 
 [[actions]]

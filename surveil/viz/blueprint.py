@@ -78,11 +78,11 @@ def build_blueprint(
         rrb.TextLogView(name="Events", origin=paths.EVENTS, columns=_event_columns()),
         state_view,
         rrb.TimeSeriesView(
-            name="Carry confidence",
+            name="Carry (+ carrying, - empty)",
             origin=paths.CARRY,
-            axis_y=rrb.ScalarAxis(range=(0.0, 1.0)),
+            axis_y=rrb.ScalarAxis(range=(-1.0, 1.0)),
         ),
-        column_shares=[3, 2, 1],
+        column_shares=[3, 2, 2],
     )
     top = rrb.Horizontal(
         world_view(cam_names, eye),

@@ -18,7 +18,7 @@ The tree mirrors the scene (world frame: metres, Z up)::
     events                        one TextLog per event, at its climax
     transitions                   tracker state changes (TextLog, DEBUG; not in the layout)
     states/{label}                tracker state lane (StateChange) or code (Scalars)
-    carry/{label}                 carry confidence per hand (Scalars)
+    carry/{label}                 carry per hand: +confidence carrying, -confidence empty
 
 ``{label}`` is the target label of formats.md (``p1/right_hand``, ``t7``): its slash makes the
 person a parent entity, so a whole person can be shown or hidden at once.
@@ -116,5 +116,5 @@ def state_path(label: str) -> str:
 
 
 def carry_path(label: str) -> str:
-    """``carry/{label}``: carry confidence of a hand."""
+    """``carry/{label}``: carry of a hand, +confidence carrying, -confidence empty."""
     return f"{CARRY}/{_label(label)}"

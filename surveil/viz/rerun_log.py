@@ -135,6 +135,18 @@ class _Track:
     phase: Phase | None = None
 
 
+def carry_signal(est: CarryEstimate) -> float:
+    """The plotted carry value: +confidence while the hand carries, -confidence while it is
+    judged empty, so that one curve shows both the decision and how sure it is.
+
+    >>> carry_signal(CarryEstimate(1, "p1/right_hand", 0, True, 120.0, 0.8))
+    0.8
+    >>> carry_signal(CarryEstimate(1, "p1/right_hand", 0, False, None, 0.3))
+    -0.3
+    """
+    return float(est.confidence) if est.carrying else -float(est.confidence)
+
+
 class RerunSink:
     """Write :class:`FrameResult` s to an .rrd file laid out for review.
 
@@ -482,7 +494,7 @@ class RerunSink:
             if path not in self._carry_paths:
                 self._carry_paths.add(path)
                 self._rec.log(path, rr.SeriesLines(names=[est.label]), static=True)
-            self._rec.log(path, rr.Scalars(float(est.confidence)))
+            self._rec.log(path, rr.Scalars(carry_signal(est)))
 
     def _log_transition(self, tr: Transition) -> None:
         partner = f" with {tr.partner_label}" if tr.partner_label else ""

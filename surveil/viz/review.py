@@ -2,8 +2,12 @@
 
 The MCAP gives targets, candidates, events and the start time; the recording gives the images
 and the rig. The cheap per-camera observations (silhouettes, skin blobs) are recomputed with
-:mod:`surveil.blobs` so that blob boxes and silhouettes show; tracker particles, transitions
-and carry estimates are not in the MCAP and are not shown.
+:mod:`surveil.blobs` (default settings, the skin models saved beside the rig) so that blob
+boxes and silhouettes show, and from them and the run's hand positions the carry estimates
+(:class:`~surveil.carry.CarryAnalyser`, default settings) for the "Carry" panel.
+Those are a re-analysis, not the run's own: the run also restarts a hand's window when the
+hand leaves the still point of a pick or place, which the MCAP does not record. Tracker
+particles and transitions are not in the MCAP and are not shown.
 """
 
 from __future__ import annotations
@@ -14,11 +18,14 @@ from pathlib import Path
 
 import numpy as np
 
-from surveil.blobs import BackgroundModel, default_skin_model, observe
+from surveil.blobs import BackgroundModel, observe
+from surveil.blobs.background import learning_frames_after
 from surveil.blobs.settings import BackgroundConfig, BlobConfig
+from surveil.carry import CarryAnalyser, CarryConfig
 from surveil.datatypes import (
     CameraObservation,
     CandidateSet,
+    CarryEstimate,
     FrameResult,
     FrameSet,
     Limb,
@@ -29,6 +36,7 @@ from surveil.datatypes import (
 from surveil.errors import InputError
 from surveil.io.mcap_reader import RunData, read_run
 from surveil.io.recording import Recording, open_recording
+from surveil.io.skin_model import load_camera_skin_models
 from surveil.viz.rerun_log import RerunSink
 
 log = logging.getLogger(__name__)
@@ -59,21 +67,32 @@ def recording_of(run: RunData) -> Path | None:
 
 
 class _Observer:
-    """Per-camera background models + the default skin model (one per camera, stateful)."""
+    """What the run computed per frame set but did not write: per-camera observations (one
+    stateful background model per camera, started as the run starts them) and, from those and
+    the run's targets, the carry estimates of the hands."""
 
-    def __init__(self) -> None:
+    def __init__(self, rec: Recording) -> None:
         self.bg_cfg, self.blob_cfg = BackgroundConfig(), BlobConfig()
-        self.skin = default_skin_model()
+        self.skin = load_camera_skin_models(rec.rig_path, rec.camera_names)
         self.models: dict[str, BackgroundModel] = {}
+        self.carry = CarryAnalyser(CarryConfig(), rec.rig)
+        self._n_sets = 0
 
-    def __call__(self, fs: FrameSet) -> dict[str, CameraObservation]:
+    def __call__(
+        self, fs: FrameSet, targets: tuple[TargetSnapshot, ...]
+    ) -> tuple[dict[str, CameraObservation], dict[int, CarryEstimate]]:
+        heads = sum(1 for t in targets if t.limb is Limb.HEAD and t.phase is not Phase.LOST)
         out = {}
         for cam, img in fs.images.items():
             model = self.models.get(cam)
             if model is None:
-                model = self.models[cam] = BackgroundModel(self.bg_cfg, img.shape[:2])
-            out[cam] = observe(img, model, self.skin, self.blob_cfg, cam)
-        return out
+                frames = learning_frames_after(self.bg_cfg, self._n_sets)
+                model = self.models[cam] = BackgroundModel(self.bg_cfg, img.shape[:2], frames)
+            out[cam] = observe(img, model, self.skin[cam], self.blob_cfg, cam, heads or None)
+        self._n_sets += 1
+        if any(m.learning for m in self.models.values()):
+            return out, {}  # as in the run: no carry analysis while the background learns
+        return out, self.carry.step(fs.t_ns, fs.images, out, targets)
 
 
 def run_frames(run: RunData) -> tuple[dict[int, list[TargetSnapshot]], dict[int, CandidateSet]]:
@@ -116,7 +135,7 @@ def review_results(
     target_t = np.array(sorted(targets), dtype=np.int64)
     half = rec.period_ns // 2
     events = sorted(run.events, key=lambda e: e.climax_ns)
-    observer = _Observer() if observations else None
+    observer = _Observer(rec) if observations else None
     pending = list(events)
     last: FrameResult | None = None
     for fs in rec.framesets():
@@ -131,13 +150,16 @@ def review_results(
         pending = pending[len(due) :]
         if last is not None:
             yield last
+        live = tuple(targets.get(t_run, ())) if t_run is not None else ()
+        observed, carry = observer(fs, live) if observer is not None else ({}, {})
         last = FrameResult(
             frameset=fs,
-            observations=observer(fs) if observer is not None else {},
+            observations=observed,
             candidates=candidates.get(t_run, CandidateSet.empty())
             if t_run is not None
             else CandidateSet.empty(),
-            track=TrackFrame(fs.t_ns, tuple(targets.get(t_run, ())) if t_run is not None else ()),
+            track=TrackFrame(fs.t_ns, live),
+            carry=carry,
             events=due,
         )
     if last is not None:
@@ -147,6 +169,7 @@ def review_results(
                 last.observations,
                 last.candidates,
                 last.track,
+                last.carry,
                 events=last.events + tuple(pending),
             )
         yield last
@@ -173,7 +196,8 @@ def build_review(
     recording : Path, optional
         The recording the run was made from; default: the one named in the MCAP's metadata.
     jpeg_quality, image_scale : see :class:`RerunSink`.
-    observations : recompute silhouettes and skin blobs (the slow part; False skips them).
+    observations : recompute silhouettes, skin blobs and carry estimates (the slow part; False
+        skips them).
     on_progress : callback ``(done, total)`` per frame set.
 
     Returns

@@ -1,6 +1,7 @@
 """``surveil review``: an .rrd from an output MCAP and its recording (the ground truth MCAP of
 the small synthetic recording stands in for a run)."""
 
+import numpy as np
 import pytest
 
 from surveil.cli import ExitCode, main
@@ -51,3 +52,16 @@ def test_cli_review_without_a_known_recording_is_bad_input(small_recording, tmp_
     code = main(["review", str(mcap), "--out", str(tmp_path / "x.rrd"), "--save"])
     assert code == ExitCode.BAD_INPUT
     assert "--recording" in capsys.readouterr().err
+
+
+def test_review_reanalyses_what_the_hands_carry(truth_mcap, small_recording):
+    # p1's right hand holds a green ball (hue 120) and gives it to p2's left hand
+    # (tests/conftest.py); the MCAP has no carry estimates, the review recomputes them
+    run, rec = read_run(truth_mcap), open_recording(small_recording)
+    results = list(review_results(run, rec))
+    assert not any(r.carry for r in results[:30]), "no carry analysis while learning"
+    hands = {"p1/left_hand", "p1/right_hand", "p2/left_hand", "p2/right_hand"}
+    assert {e.label for r in results[30:] for e in r.carry.values()} == hands
+    carrying = [e for r in results for e in r.carry.values() if e.carrying]
+    assert {e.label for e in carrying} == {"p2/left_hand"}
+    assert np.all(np.abs(np.array([e.hue_deg for e in carrying]) - 120.0) < 10.0)
