@@ -242,12 +242,17 @@ class Silhouettes:
     top_v_px, bottom_v_px : (n,) float64 -- first and last image row of each component
     dist_outside_px : (H, W) float32 -- distance of every pixel to the nearest silhouette
         pixel, 0 inside a silhouette (for the silhouette prior p_b, paper 004 eq. 27)
+    changed : (H, W) bool or None -- pixels the background model found unlike the background
+        (foreground or shadow) before the morphological clean-up; None when not known. The
+        clean-up's closing fills gaps between limbs with background, which ``changed`` tells
+        apart.
     """
 
     labels: np.ndarray
     top_v_px: np.ndarray
     bottom_v_px: np.ndarray
     dist_outside_px: np.ndarray
+    changed: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         require_shape("labels", self.labels, (None, None), np.integer)
@@ -256,6 +261,9 @@ class Silhouettes:
         require_shape("bottom_v_px", self.bottom_v_px, (n,), np.floating)
         require_shape("dist_outside_px", self.dist_outside_px, self.labels.shape, np.floating)
         readonly(self.labels, self.top_v_px, self.bottom_v_px, self.dist_outside_px)
+        if self.changed is not None:
+            require_shape("changed", self.changed, self.labels.shape, np.bool_)
+            readonly(self.changed)
 
     @property
     def n(self) -> int:

@@ -9,6 +9,7 @@ and bottom rows and a distance transform of the outside.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 
 import cv2
@@ -155,13 +156,16 @@ class BackgroundModel:
             small = cv2.resize(bgr, self._small_size, interpolation=cv2.INTER_AREA)
         raw = self._mog.apply(small, learningRate=rate)
         self.n_frames += 1
+        changed = raw != 0
         fg = (raw == FOREGROUND).view(np.uint8)
         if self._open is not None:
             fg = cv2.morphologyEx(fg, cv2.MORPH_OPEN, self._open)
         if self._close is not None:
             fg = cv2.morphologyEx(fg, cv2.MORPH_CLOSE, self._close)
         if self._small_size is None:
-            return silhouettes_from_mask(fg, self.cfg.min_person_area_px)
+            return dataclasses.replace(
+                silhouettes_from_mask(fg, self.cfg.min_person_area_px), changed=changed
+            )
         # components and distances on the small mask too (they cost more than MOG2 at full
         # size), then scaled back to frame pixels
         sx = self.shape[1] / self._small_size[0]
@@ -174,4 +178,5 @@ class BackgroundModel:
             (small.bottom_v_px + 1.0) * sy - 1.0,
             cv2.resize(small.dist_outside_px, size, interpolation=cv2.INTER_LINEAR)
             * np.float32(0.5 * (sx + sy)),
+            cv2.resize(changed.view(np.uint8), size, interpolation=cv2.INTER_NEAREST).view(bool),
         )

@@ -142,6 +142,13 @@ def extract_blobs(
         # grey dilation grows every label (overlaps go to the larger label)
         sil = cv2.dilate(sil.astype(np.uint16), kernel).astype(np.int32)
     inside = skin & (sil > 0)
+    if cfg.change_dilate_px >= 0 and silhouettes.changed is not None:
+        changed = silhouettes.changed
+        if cfg.change_dilate_px > 0:
+            d = 2 * cfg.change_dilate_px + 1
+            kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (d, d))
+            changed = cv2.dilate(changed.view(np.uint8), kernel).view(bool)
+        inside &= changed
     # the kernel is given for 640-pixel-wide frames: limbs shrink with the frame, and at
     # 320x240 (hands ~6 px) a 3-px opening would erase them
     radius_px = round((cfg.open_px - 1) / 2 * shape[1] / REFERENCE_WIDTH_PX)

@@ -100,6 +100,13 @@ class BlobConfig:
     )
     blob_excess: float = setting(1.5, "lambda: keep ceil(lambda * 3 * N_h) largest", min=1.0)
     silhouette_dilate_px: int = setting(3, "grow silhouettes by this radius, px", min=0)
+    change_dilate_px: int = setting(
+        -1,
+        "blob pixels must also lie within this radius (px) of a pixel the background model "
+        "found changed (foreground or shadow, before the clean-up): drops skin-coloured floor "
+        "and wall that the closing and the dilation add to silhouettes (-1 = no such test)",
+        min=-1,
+    )
     open_px: int = setting(
         3,
         "opening of the skin-inside-silhouette mask, elliptical kernel diameter in px of a "
