@@ -51,6 +51,21 @@ def test_thin_arm_held_out_stays_in_the_silhouette(rng):
     assert sil.labels[51, 60] == 1 and sil.labels[51, 72] == 1
 
 
+def test_changed_marks_what_differs_from_the_background_not_what_the_closing_filled(rng):
+    model = BackgroundModel(BackgroundConfig(learning_frames=20, min_person_area_px=100), (H, W))
+    _, frame = _scene(rng)
+    _learn(model, frame)
+    img = frame()
+    img[30:100, 20:30] = (20, 200, 40)  # two legs 4 px apart: the closing joins them
+    img[30:100, 34:44] = (20, 200, 40)
+    sil = model.step(img)
+    assert sil.changed is not None and sil.changed.shape == (H, W)
+    assert sil.labels[60, 32] > 0, "the closing filled the gap"
+    assert not sil.changed[60, 32]
+    assert sil.changed[60, 25] and sil.changed[60, 38]
+    assert not sil.changed[60, 100]
+
+
 def test_shadow_is_background(rng):
     model = BackgroundModel(BackgroundConfig(learning_frames=20), (H, W))
     base, frame = _scene(rng)

@@ -109,6 +109,26 @@ def test_dilation_takes_in_skin_just_outside_the_silhouette():
     assert len(extract_blobs(skin, sil, no_dilation)) == 0
 
 
+def test_skin_coloured_background_inside_the_silhouette_is_not_a_blob():
+    # the clean-up's closing fills the gap between an arm and the body with background; where
+    # that background is skin-coloured (a warm floor), it is no blob when the background model
+    # says it did not change, while a hand (changed) still is
+    sil = _one_person()
+    changed = sil.labels > 0
+    changed[30:40, 50:60] = False  # the closed gap
+    sil = dataclasses.replace(sil, changed=changed)
+    skin = np.zeros((H, W), bool)
+    skin[30:40, 50:60] = True  # skin-coloured background in the gap
+    skin[60:66, 30:36] = True  # a hand
+    cfg = BlobConfig(min_blob_area_px=1, silhouette_dilate_px=0, max_blob_area_rel=0.0)
+    kept = extract_blobs(skin, sil, dataclasses.replace(cfg, change_dilate_px=0))
+    assert kept.centroids_px.tolist() == [[32.5, 62.5]]
+    assert len(extract_blobs(skin, sil, dataclasses.replace(cfg, change_dilate_px=-1))) == 2
+    # a radius around the changed pixels takes in the rim of the gap again
+    grown = extract_blobs(skin, sil, dataclasses.replace(cfg, change_dilate_px=2))
+    assert grown.areas_px.sum() > kept.areas_px.sum()
+
+
 def test_empty_input_gives_empty_blobset():
     sil = silhouettes_from_mask(np.zeros((H, W), bool), 10)
     blobs = extract_blobs(np.zeros((H, W), bool), sil, BlobConfig())
