@@ -11,6 +11,7 @@ import dataclasses
 import enum
 import json
 import logging
+import os
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -552,6 +553,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(ExitCode.BAD_INPUT)
     except KeyboardInterrupt:
         return int(ExitCode.INTERRUPTED)
+    except BrokenPipeError:
+        # the reader of our output went away (`surveil events --json | head`): not an error
+        # of ours; stop writing and keep the interpreter from complaining at exit
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return int(ExitCode.OK)
 
 
 if __name__ == "__main__":

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -125,3 +127,16 @@ def test_events_of_a_run_without_events(tmp_path, rig, capsys):
 def test_events_of_a_missing_file(tmp_path, capsys):
     assert main(["events", str(tmp_path / "absent.mcap")]) == ExitCode.BAD_INPUT
     assert "absent.mcap" in capsys.readouterr().err
+
+
+def test_events_piped_into_a_reader_that_stops_early_is_not_an_error(tmp_path, rig):
+    # `surveil events OUT.mcap --json | head -1`: the pipe closes after the first line
+    path = write_run(tmp_path / "run.mcap", rig, [EXCHANGE, CLAP] * 2000)
+    cmd = [sys.executable, "-m", "surveil", "events", "--json", str(path)]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    first = proc.stdout.readline()
+    proc.stdout.close()
+    err = proc.stderr.read().decode()
+    assert json.loads(first)["activity"] == "clap"
+    assert proc.wait(timeout=60) == ExitCode.OK, err
+    assert "Traceback" not in err and "BrokenPipe" not in err, err
