@@ -142,12 +142,14 @@ class BackgroundModel:
         """True while in the initial learning phase."""
         return self.n_frames < self.learning_frames
 
-    def step(self, bgr: np.ndarray) -> Silhouettes:
+    def step(self, bgr: np.ndarray, changed: bool = False) -> Silhouettes:
         """Update the model with one frame and return its person silhouettes.
 
         Parameters
         ----------
         bgr : (H, W, 3) uint8 BGR, H and W as given at construction.
+        changed : also return ``Silhouettes.changed`` (what MOG2 found unlike the background
+            before the clean-up; the blob stage asks for it when ``change_dilate_px`` >= 0)
         """
         require_shape("bgr", bgr, (*self.shape, 3), np.uint8)
         rate = self.cfg.learning_rate_initial if self.learning else self.cfg.learning_rate
@@ -156,7 +158,7 @@ class BackgroundModel:
             small = cv2.resize(bgr, self._small_size, interpolation=cv2.INTER_AREA)
         raw = self._mog.apply(small, learningRate=rate)
         self.n_frames += 1
-        changed = raw != 0
+        changed_small = raw != 0 if changed else None
         fg = (raw == FOREGROUND).view(np.uint8)
         if self._open is not None:
             fg = cv2.morphologyEx(fg, cv2.MORPH_OPEN, self._open)
@@ -164,7 +166,7 @@ class BackgroundModel:
             fg = cv2.morphologyEx(fg, cv2.MORPH_CLOSE, self._close)
         if self._small_size is None:
             return dataclasses.replace(
-                silhouettes_from_mask(fg, self.cfg.min_person_area_px), changed=changed
+                silhouettes_from_mask(fg, self.cfg.min_person_area_px), changed=changed_small
             )
         # components and distances on the small mask too (they cost more than MOG2 at full
         # size), then scaled back to frame pixels
@@ -178,5 +180,9 @@ class BackgroundModel:
             (small.bottom_v_px + 1.0) * sy - 1.0,
             cv2.resize(small.dist_outside_px, size, interpolation=cv2.INTER_LINEAR)
             * np.float32(0.5 * (sx + sy)),
-            cv2.resize(changed.view(np.uint8), size, interpolation=cv2.INTER_NEAREST).view(bool),
+            None
+            if changed_small is None
+            else cv2.resize(
+                changed_small.view(np.uint8), size, interpolation=cv2.INTER_NEAREST
+            ).view(bool),
         )

@@ -224,7 +224,7 @@ def observe(
     n_people_hint: int | None = None,
 ) -> CameraObservation:
     """One camera frame -> silhouettes (updating ``background_model``), skin, blobs."""
-    silhouettes = background_model.step(bgr)
+    silhouettes = background_model.step(bgr, changed=cfg.change_dilate_px >= 0)
     skin = skin_model.classify(bgr)
     blobs = extract_blobs(skin, silhouettes, cfg, n_people_hint, bgr)
     return CameraObservation(camera, silhouettes, skin, blobs)

@@ -58,7 +58,7 @@ def test_changed_marks_what_differs_from_the_background_not_what_the_closing_fil
     img = frame()
     img[30:100, 20:30] = (20, 200, 40)  # two legs 4 px apart: the closing joins them
     img[30:100, 34:44] = (20, 200, 40)
-    sil = model.step(img)
+    sil = model.step(img, changed=True)
     assert sil.changed is not None and sil.changed.shape == (H, W)
     assert sil.labels[60, 32] > 0, "the closing filled the gap"
     assert not sil.changed[60, 32]
