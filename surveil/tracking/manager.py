@@ -53,6 +53,20 @@ ACTIVE = (Phase.UNLABELLED, Phase.NORMAL, Phase.COMBINED)
 HISTORY_FRAMES = 30  # estimates kept per tracker (for the angle rule's "before" vector)
 
 
+def _persisted(since_ns: int | None, t_ns: int, need_s: float) -> tuple[int, bool]:
+    """For a condition that holds at ``t_ns``: when it began (``since_ns``, or ``t_ns`` if it
+    begins now) and whether it has held for ``need_s`` seconds. The caller stores the first
+    and resets it to None when the condition fails.
+
+    >>> _persisted(None, 5_000_000_000, 1.0)
+    (5000000000, False)
+    >>> _persisted(4_000_000_000, 5_000_000_000, 1.0)
+    (4000000000, True)
+    """
+    since = t_ns if since_ns is None else since_ns
+    return since, (t_ns - since) * 1e-9 >= need_s
+
+
 @dataclass(slots=True, eq=False)
 class _Track:
     """Mutable bookkeeping of one tracker (its particles live in the manager's array)."""
@@ -885,9 +899,8 @@ class MultiTargetTracker:
                 if h.phase is not Phase.NORMAL or not lab.astray(h.mean_m, heads[i], others, lcfg):
                     h.astray_ns = None
                     continue
-                if h.astray_ns is None:
-                    h.astray_ns = t_ns
-                if (t_ns - h.astray_ns) * 1e-9 < lcfg.reach_revise_s:
+                h.astray_ns, due = _persisted(h.astray_ns, t_ns, lcfg.reach_revise_s)
+                if not due:
                     continue
                 log.debug(
                     "t%d (%s) is out of p%d's reach: label taken off", h.id, h.label, p.number
@@ -942,9 +955,8 @@ class MultiTargetTracker:
             if p is None or len(p.hand_ids) < 2 or not held:
                 c.contest_ns = None
                 continue
-            if c.contest_ns is None:
-                c.contest_ns = t_ns
-            if (t_ns - c.contest_ns) * 1e-9 < lcfg.contest_s:
+            c.contest_ns, due = _persisted(c.contest_ns, t_ns, lcfg.contest_s)
+            if not due:
                 continue
             h = min(held, key=lambda h: float(np.linalg.norm(h.mean_m - c.mean_m)))
             log.debug(
@@ -1090,9 +1102,8 @@ class MultiTargetTracker:
             if lat[0] - lat[1] > -lcfg.lr_revise_margin_m:
                 p.contradicted_ns = None
                 continue
-            if p.contradicted_ns is None:
-                p.contradicted_ns = t_ns
-            if (t_ns - p.contradicted_ns) * 1e-9 >= lcfg.lr_revise_s:
+            p.contradicted_ns, due = _persisted(p.contradicted_ns, t_ns, lcfg.lr_revise_s)
+            if due:
                 left.limb, right.limb = Limb.RIGHT_HAND, Limb.LEFT_HAND
                 p.contradicted_ns = None
                 log.debug("p%d: left / right swapped (t%d, t%d)", p.number, left.id, right.id)
