@@ -1,0 +1,86 @@
+"""What the skin blobs lie on: every blob by the ground-truth class of most of its pixels.
+
+    python benchmarks/blob_classes.py [--out out/bench_synth] [--config X.toml] [NAME ...]
+
+For every blob after the learning phase, in frames with ground-truth masks, the mask class
+(:class:`surveil.io.ground_truth.MaskClass`) under most of its pixels: ``SKIN`` (a real head
+or hand), ``CLOTHING``, ``HAIR``, ``OBJECT``, ``SKIN_DISTRACTOR`` (skin-coloured scenery such
+as a wooden table) or ``BACKGROUND`` (floor, walls: skin-coloured background that the
+silhouette clean-up took in). Prints the share of each class per scene, and of the
+background blobs the share per camera. Blobs are extracted with the true number of people,
+as in ``candidate_misses.py``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections import Counter
+from pathlib import Path
+
+import cv2
+import numpy as np
+from front_end import observe_recording
+
+from surveil.io.ground_truth import MaskClass, load_ground_truth
+from surveil.io.recording import open_recording
+from surveil.pipeline import load_pipeline_config
+from surveil.synth.scene import synthesise
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def blob_classes(rec_dir: Path, config) -> tuple[Counter, Counter]:
+    """(blobs per mask class name, background blobs per camera) over a recording."""
+    rec = open_recording(rec_dir)
+    gt = load_ground_truth(rec_dir)
+    n_people = len({lab.split("/")[0] for lab in gt.labels})
+    by_class: Counter = Counter()
+    background_by_cam: Counter = Counter()
+    for fs, by_name, _ in observe_recording(rec, config, n_people):
+        if fs.index < config.background.learning_frames:
+            continue
+        for cam, obs in by_name.items():
+            path = rec_dir / "ground_truth" / "masks" / cam / f"{fs.index:06d}.png"
+            if not path.is_file() or not len(obs.blobs):
+                continue
+            classes = cv2.imread(str(path))[..., 0]
+            labels = obs.blobs.labels
+            inside = labels > 0
+            # (blob, class) pixel counts in one pass
+            counts = np.zeros((len(obs.blobs) + 1, len(MaskClass)), np.int64)
+            np.add.at(counts, (labels[inside], classes[inside]), 1)
+            for k in counts[1:].argmax(axis=1)[counts[1:].sum(axis=1) > 0]:
+                by_class[MaskClass(int(k)).name] += 1
+                if k == MaskClass.BACKGROUND:
+                    background_by_cam[cam] += 1
+    return by_class, background_by_cam
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("names", nargs="*")
+    parser.add_argument("--out", type=Path, default=ROOT / "out" / "bench_synth")
+    parser.add_argument("--config", type=Path, help="pipeline settings (TOML)")
+    args = parser.parse_args(argv)
+    config = load_pipeline_config(args.config)
+    paths = [ROOT / "recordings" / f"{n}.toml" for n in args.names] or sorted(
+        (ROOT / "recordings").glob("*.toml")
+    )
+    names = [c.name for c in MaskClass]
+    print("Share of the blobs by the ground-truth class under most of their pixels:\n")
+    print("| scenario | blobs | " + " | ".join(names) + " | background blobs by camera |")
+    print("|---|---|" + "---|" * len(names) + "---|")
+    for path in paths:
+        rec_dir = args.out / path.stem
+        synthesise(path, rec_dir)
+        by_class, by_cam = blob_classes(rec_dir, config)
+        total = max(sum(by_class.values()), 1)
+        cells = " | ".join(f"{by_class[n] / total:.3f}" for n in names)
+        cams = ", ".join(f"{c} {by_cam[c]}" for c in sorted(by_cam))
+        print(f"| {path.stem} | {sum(by_class.values())} | {cells} | {cams} |", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
