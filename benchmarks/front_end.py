@@ -40,7 +40,7 @@ def observe_recording(
                     cfg.background, img.shape[:2], learning_frames_after(cfg.background, fs.index)
                 )
             t0 = time.perf_counter()
-            sil = models[cam].step(img, changed=cfg.blobs.change_dilate_px >= 0)
+            sil = models[cam].step(img, **cfg.blobs.background_requests())
             t1 = time.perf_counter()
             skin = skin_model.classify(img)
             t2 = time.perf_counter()

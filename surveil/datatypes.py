@@ -246,6 +246,10 @@ class Silhouettes:
         (foreground or shadow) before the morphological clean-up; None when not known. The
         clean-up's closing fills gaps between limbs with background, which ``changed`` tells
         apart.
+    background_edges : (H, W) float32 or None -- gradient magnitude (3x3 Sobel of the grey
+        image) of the background model's image, recomputed every few frames; None during the
+        learning phase or when not asked for. Edges of the empty scene: the blob stage tells
+        revealed background (an object taken away) from things in front of it with them.
     """
 
     labels: np.ndarray
@@ -253,6 +257,7 @@ class Silhouettes:
     bottom_v_px: np.ndarray
     dist_outside_px: np.ndarray
     changed: np.ndarray | None = None
+    background_edges: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         require_shape("labels", self.labels, (None, None), np.integer)
@@ -264,6 +269,11 @@ class Silhouettes:
         if self.changed is not None:
             require_shape("changed", self.changed, self.labels.shape, np.bool_)
             readonly(self.changed)
+        if self.background_edges is not None:
+            require_shape(
+                "background_edges", self.background_edges, self.labels.shape, np.float32
+            )
+            readonly(self.background_edges)
 
     @property
     def n(self) -> int:

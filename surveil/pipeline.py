@@ -148,7 +148,7 @@ class Pipeline:
                     learning_frames_after(self.cfg.background, self._n_framesets),
                 )
             t0 = time.perf_counter()
-            silhouettes = bg.step(img, changed=self.cfg.blobs.change_dilate_px >= 0)
+            silhouettes = bg.step(img, **self.cfg.blobs.background_requests())
             t1 = time.perf_counter()
             skin = self.skin_models[cam].classify(img)
             t2 = time.perf_counter()

@@ -25,6 +25,18 @@ log = logging.getLogger(__name__)
 FOREGROUND = 255  # MOG2 output: 255 foreground, 127 shadow, 0 background
 
 
+def sobel_magnitude(grey: np.ndarray) -> np.ndarray:
+    """(H, W) float32 gradient magnitude of a grey image (3x3 Sobel, reflected border).
+
+    >>> g = np.zeros((5, 6), np.uint8); g[:, 3:] = 10
+    >>> sobel_magnitude(g)[2].tolist()
+    [0.0, 0.0, 40.0, 40.0, 0.0, 0.0]
+    """
+    gx = cv2.Sobel(grey, cv2.CV_32F, 1, 0, ksize=3)
+    gy = cv2.Sobel(grey, cv2.CV_32F, 0, 1, ksize=3)
+    return cv2.magnitude(gx, gy)
+
+
 def _ellipse(diameter_px: int) -> np.ndarray | None:
     if diameter_px <= 1:
         return None
@@ -136,13 +148,32 @@ class BackgroundModel:
         )
         self._mog.setBackgroundRatio(self.cfg.background_ratio)
         self.n_frames = 0
+        self._edges: np.ndarray | None = None
+        self._edges_frame = 0
 
     @property
     def learning(self) -> bool:
         """True while in the initial learning phase."""
         return self.n_frames < self.learning_frames
 
-    def step(self, bgr: np.ndarray, changed: bool = False) -> Silhouettes:
+    def background_edges(self) -> np.ndarray | None:
+        """(H, W) float32 gradient magnitude of the background image (3x3 Sobel of its grey
+        version, at frame size), or None during the learning phase. Recomputed every
+        ``cfg.edges_every_frames`` frames and shared (read-only) in between."""
+        if self.learning:
+            return None
+        if self._edges is None or self.n_frames - self._edges_frame >= self.cfg.edges_every_frames:
+            image = self._mog.getBackgroundImage()
+            if self._small_size is not None:
+                image = cv2.resize(image, self.shape[::-1], interpolation=cv2.INTER_LINEAR)
+            self._edges = sobel_magnitude(cv2.cvtColor(image, cv2.COLOR_BGR2GRAY))
+            self._edges.flags.writeable = False
+            self._edges_frame = self.n_frames
+        return self._edges
+
+    def step(
+        self, bgr: np.ndarray, changed: bool = False, background_edges: bool = False
+    ) -> Silhouettes:
         """Update the model with one frame and return its person silhouettes.
 
         Parameters
@@ -150,6 +181,8 @@ class BackgroundModel:
         bgr : (H, W, 3) uint8 BGR, H and W as given at construction.
         changed : also return ``Silhouettes.changed`` (what MOG2 found unlike the background
             before the clean-up; the blob stage asks for it when ``change_dilate_px`` >= 0)
+        background_edges : also return ``Silhouettes.background_edges``
+            (:meth:`background_edges`; the blob stage's ghost test)
         """
         require_shape("bgr", bgr, (*self.shape, 3), np.uint8)
         rate = self.cfg.learning_rate_initial if self.learning else self.cfg.learning_rate
@@ -159,6 +192,7 @@ class BackgroundModel:
         raw = self._mog.apply(small, learningRate=rate)
         self.n_frames += 1
         changed_small = raw != 0 if changed else None
+        edges = self.background_edges() if background_edges else None
         fg = (raw == FOREGROUND).view(np.uint8)
         if self._open is not None:
             fg = cv2.morphologyEx(fg, cv2.MORPH_OPEN, self._open)
@@ -166,7 +200,9 @@ class BackgroundModel:
             fg = cv2.morphologyEx(fg, cv2.MORPH_CLOSE, self._close)
         if self._small_size is None:
             return dataclasses.replace(
-                silhouettes_from_mask(fg, self.cfg.min_person_area_px), changed=changed_small
+                silhouettes_from_mask(fg, self.cfg.min_person_area_px),
+                changed=changed_small,
+                background_edges=edges,
             )
         # components and distances on the small mask too (they cost more than MOG2 at full
         # size), then scaled back to frame pixels
@@ -185,4 +221,5 @@ class BackgroundModel:
             else cv2.resize(
                 changed_small.view(np.uint8), size, interpolation=cv2.INTER_NEAREST
             ).view(bool),
+            edges,
         )

@@ -55,6 +55,13 @@ class BackgroundConfig:
     )
     close_px: int = setting(9, "elliptical closing kernel diameter, px (0 = none)", min=0)
     min_person_area_px: int = setting(400, "smallest silhouette kept, px", min=0)
+    edges_every_frames: int = setting(
+        15,
+        "the background image's gradients (for the blob stage's ghost test) are recomputed "
+        "every this many frames: the background changes slowly, and reading it from MOG2 costs "
+        "about 0.7 ms",
+        min=1,
+    )
 
 
 @dataclass(frozen=True)
@@ -107,6 +114,14 @@ class BlobConfig:
         "and wall that the closing and the dilation add to silhouettes (-1 = no such test)",
         min=-1,
     )
+    ghost_edge_ratio: float = setting(
+        0.6,
+        "a blob is revealed background (a ghost: skin-coloured furniture under an object just "
+        "taken away) when the image gradient along its silhouette outline is below this "
+        "fraction of the background image's gradient there: the outline is an edge of the "
+        "background, not of anything in front of it (0 = no such test)",
+        min=0.0,
+    )
     open_px: int = setting(
         3,
         "opening of the skin-inside-silhouette mask, elliptical kernel diameter in px of a "
@@ -115,3 +130,10 @@ class BlobConfig:
         "heads and hands into one blob",
         min=0,
     )
+
+    def background_requests(self) -> dict[str, bool]:
+        """What this stage needs from ``BackgroundModel.step`` besides the silhouettes."""
+        return {
+            "changed": self.change_dilate_px >= 0,
+            "background_edges": self.ghost_edge_ratio > 0,
+        }
