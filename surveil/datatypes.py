@@ -270,9 +270,7 @@ class Silhouettes:
             require_shape("changed", self.changed, self.labels.shape, np.bool_)
             readonly(self.changed)
         if self.background_edges is not None:
-            require_shape(
-                "background_edges", self.background_edges, self.labels.shape, np.float32
-            )
+            require_shape("background_edges", self.background_edges, self.labels.shape, np.float32)
             readonly(self.background_edges)
 
     @property

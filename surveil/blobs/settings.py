@@ -115,7 +115,7 @@ class BlobConfig:
         min=-1,
     )
     ghost_edge_ratio: float = setting(
-        0.6,
+        0.45,
         "a blob is revealed background (a ghost: skin-coloured furniture under an object just "
         "taken away) when the image gradient along its silhouette outline is below this "
         "fraction of the background image's gradient there: the outline is an edge of the "

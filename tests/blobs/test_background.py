@@ -66,6 +66,25 @@ def test_changed_marks_what_differs_from_the_background_not_what_the_closing_fil
     assert not sil.changed[60, 100]
 
 
+def test_background_edges_are_the_learnt_scenes_edges_refreshed_every_few_frames(rng):
+    cfg = BackgroundConfig(learning_frames=20, min_person_area_px=100, edges_every_frames=5)
+    model = BackgroundModel(cfg, (H, W))
+    _, frame = _scene(rng)  # grey left half, orange right half
+    for _ in range(19):
+        assert model.step(frame(), background_edges=True).background_edges is None  # learning
+    edges = model.step(frame(), background_edges=True).background_edges
+    assert edges.shape == (H, W) and edges.dtype == np.float32
+    assert edges[60, W // 2 - 1] > 50 and edges[60, 20] < 5 and edges[60, 120] < 5
+    img = frame()
+    img[30:90, 20:40] = (20, 200, 40)  # a person: not in the background image
+    assert model.step(img, background_edges=True).background_edges is edges  # shared
+    assert model.step(frame()).background_edges is None  # not asked for
+    for _ in range(2):
+        assert model.step(frame(), background_edges=True).background_edges is edges
+    refreshed = model.step(frame(), background_edges=True).background_edges
+    assert refreshed is not edges and edges[60, 30] < 5
+
+
 def test_shadow_is_background(rng):
     model = BackgroundModel(BackgroundConfig(learning_frames=20), (H, W))
     base, frame = _scene(rng)

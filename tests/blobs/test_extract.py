@@ -129,6 +129,45 @@ def test_skin_coloured_background_inside_the_silhouette_is_not_a_blob():
     assert grown.areas_px.sum() > kept.areas_px.sum()
 
 
+def _table_with_ghost_and_hand():
+    """A skin-coloured table seen whole; an object just taken off it at rows 20-39, cols
+    20-39 (a ghost: foreground, skin, its outline an edge of the background image only) and
+    a darker hand resting on it at rows 60-71, cols 60-69."""
+    img = np.full((H, W, 3), (90, 140, 190), np.uint8)
+    img[60:72, 60:70] = (50, 80, 130)
+    mask = np.zeros((H, W), bool)
+    mask[20:40, 20:40] = True
+    mask[60:72, 60:70] = True
+    edges = np.zeros((H, W), np.float32)
+    edges[18:42, 18:42] = 200.0  # the object's outline in the background image
+    edges[22:38, 22:38] = 0.0
+    sil = dataclasses.replace(silhouettes_from_mask(mask, 10), background_edges=edges)
+    return img, mask.copy(), sil
+
+
+def test_revealed_skin_coloured_table_is_no_blob_but_a_hand_on_it_is():
+    img, skin, sil = _table_with_ghost_and_hand()
+    cfg = BlobConfig(min_blob_area_px=1, silhouette_dilate_px=0, max_blob_area_rel=0.0)
+    blobs = extract_blobs(skin, sil, cfg, 1, img)
+    assert blobs.centroids_px.tolist() == [[64.5, 65.5]]
+    # the test is off at ratio 0, without the frame, and while the background is learnt
+    assert len(extract_blobs(skin, sil, dataclasses.replace(cfg, ghost_edge_ratio=0.0), 1, img))
+    assert len(extract_blobs(skin, sil, cfg, 1)) == 2
+    learning = dataclasses.replace(sil, background_edges=None)
+    assert len(extract_blobs(skin, learning, cfg, 1, img)) == 2
+
+
+def test_ghost_test_leaves_a_hand_in_front_of_an_edge_of_the_background():
+    # a hand held over the object's former outline: the background edge is there, but so is
+    # the hand's own edge in the frame
+    img, skin, sil = _table_with_ghost_and_hand()
+    edges = np.array(sil.background_edges)
+    edges[55:77, 55:75] = 60.0
+    sil = dataclasses.replace(sil, background_edges=edges)
+    cfg = BlobConfig(min_blob_area_px=1, silhouette_dilate_px=0, max_blob_area_rel=0.0)
+    assert extract_blobs(skin, sil, cfg, 1, img).centroids_px.tolist() == [[64.5, 65.5]]
+
+
 def test_empty_input_gives_empty_blobset():
     sil = silhouettes_from_mask(np.zeros((H, W), bool), 10)
     blobs = extract_blobs(np.zeros((H, W), bool), sil, BlobConfig())
