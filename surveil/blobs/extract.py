@@ -186,8 +186,8 @@ def revealed_background(
         np.ones((d, d), np.uint8),
         borderType=cv2.BORDER_REPLICATE,
     )
-    index = np.full(int(comp.max()) + 1, -1, np.int64)
-    index[ids[ids < len(index)]] = np.flatnonzero(ids < len(index))
+    index = np.full(max(int(comp.max()), int(ids.max())) + 1, -1, np.int64)
+    index[ids] = np.arange(len(ids))
     ys, xs = np.nonzero((inner == 0) & (comp > 0))
     group = index[comp[ys, xs]]
     keep = group >= 0
