@@ -624,11 +624,20 @@ class ActivityEngine:
                     for o in cur.targets.values()
                 ):
                     continue
-                far = np.linalg.norm(ps[:first] - point, axis=1) >= th.separation_m
-                if not far.any():
-                    continue  # no reach: the hand did not come from separation_m away
-                start = int(ts[:first][far][-1])
                 climax = int(ts[first])
+                far = np.linalg.norm(ps[:first] - point, axis=1) >= th.separation_m
+                if far.any():
+                    start = int(ts[:first][far][-1])
+                    before = self._latest_carry(hand.target_id, start)
+                elif ts[0] > since and np.linalg.norm(ps[0] - point) >= th.seen_reach_m:
+                    # the track begins late in the reach (the hand was unseen before): what
+                    # it held on the part seen is what it brought
+                    start = int(ts[0])
+                    before = self._confident_carry(
+                        hand.target_id, climax, start, th.min_confidence
+                    )
+                else:
+                    continue  # no reach: the hand did not come from separation_m away
                 self._stills[key] = _StillEpisode(
                     rule=rule,
                     hand_id=hand.target_id,
@@ -637,7 +646,7 @@ class ActivityEngine:
                     start_ns=start,
                     detected_ns=cur.t_ns,
                     point_m=point,
-                    before=self._latest_carry(hand.target_id, start),
+                    before=before,
                 )
                 log.debug("%s: %s still at %d ns", rule.rule_id, hand.label, climax)
 

@@ -120,6 +120,14 @@ class Thresholds:
         min=0.0,
         max=3.0,
     )
+    seen_reach_m: float = setting(
+        0.15,
+        "pick/place: a hand whose track begins during the look-back (a tracker started or "
+        "re-acquired late in the reach) needs only this much of the reach seen: its first "
+        "sample this far from the still point (>= separation_m: the whole reach, always), m",
+        min=0.0,
+        max=3.0,
+    )
     min_confidence: float = setting(
         0.3,
         "carry estimates less confident than this count as unknown (only 'any' matches)",

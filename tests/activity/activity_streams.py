@@ -60,6 +60,7 @@ class Track:
     limb: Limb
     path: Path3
     carry: CarryFn | None = None  # hands only
+    from_s: float = 0.0  # the tracker exists from this time on (started or re-acquired late)
 
     @property
     def label(self) -> str:
@@ -108,6 +109,8 @@ class Script:
         targets, carry = [], {}
         by_id = {tr.tid: tr for tr in self.tracks}
         for tr in self.tracks:
+            if t < tr.from_s:
+                continue
             phase, j = self._state(tr.tid, t)
             limb_of = self._identity(tr.tid, t)
             if phase is Phase.COMBINED:

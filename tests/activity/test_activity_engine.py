@@ -183,6 +183,35 @@ def test_place_reach_stop_return_leaves_object(rules):
     assert abs(ev.climax_ns - 1.1 * S) <= 0.1 * S
 
 
+@pytest.mark.parametrize("activity", ["pick", "place"])
+def test_hand_first_seen_late_in_its_reach_still_counts(rules, activity):
+    """A hand tracker started (or re-acquired) 0.25 s before the hand stops has not seen the
+    separation_m of reach (pick_place's place: the hand carried the box seen by one camera).
+    Its first sample is 0.23 m from the still point (>= seen_reach_m): the rest of the reach
+    happened unseen, the still moment is the climax and the carry evidence between the
+    tracker's first sample and the climax is the state before."""
+    carry = (
+        switch(1.35, empty(), holding(BLUE))
+        if activity == "pick"
+        else switch(1.35, holding(BLUE), empty())
+    )
+    script = reach(carry)
+    script.tracks[2].from_s = 0.85
+    ev = only(run(rules, script.stream()), activity)
+    assert abs(ev.climax_ns - 1.1 * S) <= 0.1 * S
+    assert ev.start_ns == pytest.approx(0.8667 * S, abs=0.01 * S)  # its first frame set
+
+
+@pytest.mark.parametrize("from_s", [0.95, 1.15])
+def test_hand_first_seen_near_its_still_point_is_no_event(rules, from_s):
+    """A tracker whose first sample is already within seen_reach_m (0.15 m) of the still
+    point shows no reach: a hand held still where a new tracker found it (three_people: a
+    held object that the carry stage notices late read as a pick)."""
+    script = reach(switch(1.35, holding(BLUE), empty()))
+    script.tracks[2].from_s = from_s
+    assert run(rules, script.stream()) == []
+
+
 def test_place_waits_for_carry_evidence_from_after_the_hand_left(rules):
     """The carry stage fuses the last 0.8 s: for that long after the hand leaves the table
     point (at ~1.9 s) its estimate still holds frames with the object beside it. The place
