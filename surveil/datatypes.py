@@ -250,6 +250,8 @@ class Silhouettes:
         image) of the background model's image, recomputed every few frames; None during the
         learning phase or when not asked for. Edges of the empty scene: the blob stage tells
         revealed background (an object taken away) from things in front of it with them.
+    centres_px : (n, 2) float64 or None -- centre of mass (u, v) of each component; None when
+        not known. The blob stage tells a bare forearm's hand end from its elbow end with it.
     """
 
     labels: np.ndarray
@@ -258,6 +260,7 @@ class Silhouettes:
     dist_outside_px: np.ndarray
     changed: np.ndarray | None = None
     background_edges: np.ndarray | None = None
+    centres_px: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         require_shape("labels", self.labels, (None, None), np.integer)
@@ -265,6 +268,8 @@ class Silhouettes:
         require_shape("top_v_px", self.top_v_px, (n,), np.floating)
         require_shape("bottom_v_px", self.bottom_v_px, (n,), np.floating)
         require_shape("dist_outside_px", self.dist_outside_px, self.labels.shape, np.floating)
+        if self.centres_px is not None:
+            require_shape("centres_px", self.centres_px, (n, 2), np.floating)
         readonly(self.labels, self.top_v_px, self.bottom_v_px, self.dist_outside_px)
         if self.changed is not None:
             require_shape("changed", self.changed, self.labels.shape, np.bool_)
@@ -287,7 +292,8 @@ class Silhouettes:
 class BlobSet:
     """Skin blobs of one camera frame, largest first (paper 004 section 6.2).
 
-    centroids_px : (B, 2) float64 -- centre of mass (u, v)
+    centroids_px : (B, 2) float64 -- the blob's point (u, v): its centre of mass, or the
+        centre of its hand end when it is a bare forearm (docs/blobs.md, "Bare forearms")
     areas_px : (B,) int64
     bboxes_px : (B, 4) int32 -- x, y, width, height
     silhouette : (B,) int32 -- label of the silhouette component holding the blob (0 none)

@@ -67,7 +67,7 @@ def silhouettes_from_mask(foreground: np.ndarray, min_area_px: int) -> Silhouett
     require_shape("foreground", foreground, (None, None), np.generic)
     fg = foreground.astype(np.uint8, copy=False)
     h, w = fg.shape
-    n_all, labels, stats, _ = components_with_stats(fg)
+    n_all, labels, stats, centres = components_with_stats(fg)
     keep = np.flatnonzero(stats[:, cv2.CC_STAT_AREA] >= max(min_area_px, 1))
     keep = keep[keep > 0]  # component 0 is the background
     relabel = np.zeros(n_all, np.int32)
@@ -80,7 +80,7 @@ def silhouettes_from_mask(foreground: np.ndarray, min_area_px: int) -> Silhouett
         dist = cv2.distanceTransform(outside, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
     else:
         dist = np.full((h, w), np.hypot(h, w), np.float32)
-    return Silhouettes(labels, top, bottom, dist)
+    return Silhouettes(labels, top, bottom, dist, centres_px=centres[keep].astype(np.float64))
 
 
 def learning_frames_after(cfg: BackgroundConfig, framesets_before: int) -> int:
@@ -222,4 +222,5 @@ class BackgroundModel:
                 changed_small.view(np.uint8), size, interpolation=cv2.INTER_NEAREST
             ).view(bool),
             edges,
+            None if small.centres_px is None else (small.centres_px + 0.5) * (sx, sy) - 0.5,
         )

@@ -20,6 +20,8 @@ REFERENCE_WIDTH_PX = 640  # frame width the pixel sizes of BlobConfig.open_px ar
 # meaningless there
 EDGE_FLOOR = 8.0
 OUTLINE_PX = 2  # a blob pixel this close to the outside of every silhouette is on its outline
+# a bare forearm with its hand is ~5 times longer than wide; a face with its neck ~2 times
+ARM_ASPECT = 3.0
 MIN_OUTLINE_PX = 5  # fewer outline pixels than this: no verdict, the blob is kept
 
 
@@ -207,6 +209,85 @@ def revealed_background(
     return ghost & (counts >= MIN_OUTLINE_PX)
 
 
+def hand_ends(
+    pixels_px: np.ndarray,
+    blob_of: np.ndarray,
+    centroids_px: np.ndarray,
+    body_centres_px: np.ndarray,
+    body_heights_px: np.ndarray,
+    arm_length_rel: float,
+    arm_max_length_rel: float,
+    hand_length_rel: float,
+) -> np.ndarray:
+    """Each blob's point: its centre of mass, or its hand end when it is a bare forearm.
+
+    With short sleeves the forearm is skin too, and its blob's centre of mass lies halfway to
+    the elbow, ~15 cm from the hand. A blob whose extent along its principal axis (sqrt(12)
+    times the standard deviation, exact for a uniform bar) lies between ``arm_length_rel``
+    and ``arm_max_length_rel`` times its silhouette's height and exceeds ``ARM_ASPECT``
+    times its width is such an arm; its point becomes the centre of mass of its
+    pixels within ``hand_length_rel`` times that height of the tip farther from the
+    silhouette's centre (the hand hangs, reaches or rises away from the torso; the elbow
+    stays near it). All blobs at once: per-blob moments by ``np.bincount``.
+
+    Parameters
+    ----------
+    pixels_px : (P, 2) float64 -- (u, v) of every blob pixel
+    blob_of : (P,) int -- index of the blob each pixel belongs to, 0..B-1
+    centroids_px : (B, 2) float64 -- their centres of mass
+    body_centres_px : (B, 2) float64 -- centre of mass of each blob's silhouette
+    body_heights_px : (B,) float64 -- height of each blob's silhouette
+
+    Returns
+    -------
+    (B, 2) float64 -- the points; a copy of ``centroids_px`` where no blob is an arm
+
+    >>> yy, xx = np.mgrid[0:40, 0:4]  # a vertical bar 40 px long, 4 px wide
+    >>> px = np.column_stack([xx.ravel(), yy.ravel()]).astype(float)
+    >>> c = px.mean(axis=0, keepdims=True)
+    >>> hand_ends(px, np.zeros(len(px), int), c, np.array([[1.5, -20.0]]), np.array([100.0]),
+    ...           0.17, 0.5, 0.1).round(2).tolist()  # body above: the hand is the lower end
+    [[1.5, 34.0]]
+    """
+    n = len(centroids_px)
+    out = centroids_px.copy()
+    if n == 0 or len(pixels_px) == 0:
+        return out
+    d = pixels_px - centroids_px[blob_of]
+    count = np.maximum(np.bincount(blob_of, minlength=n), 1)
+    sxx = np.bincount(blob_of, d[:, 0] ** 2, n) / count
+    syy = np.bincount(blob_of, d[:, 1] ** 2, n) / count
+    sxy = np.bincount(blob_of, d[:, 0] * d[:, 1], n) / count
+    # major eigenvalue and its direction of each 2x2 covariance
+    half_diff = 0.5 * (sxx - syy)
+    root = np.hypot(half_diff, sxy)
+    major = 0.5 * (sxx + syy) + root
+    minor = np.maximum(0.5 * (sxx + syy) - root, 0.0)
+    angle = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)
+    axis = np.column_stack([np.cos(angle), np.sin(angle)])
+    length = np.sqrt(12.0 * major)
+    arm = (
+        (length > arm_length_rel * body_heights_px)
+        & (length < arm_max_length_rel * body_heights_px)
+        & (major > ARM_ASPECT**2 * minor)
+    )
+    if not arm.any():
+        return out
+    # point each arm's axis away from its silhouette's centre
+    away = np.einsum("bi,bi->b", centroids_px - body_centres_px, axis)
+    axis *= np.where(away < 0, -1.0, 1.0)[:, None]
+    t = np.einsum("pi,pi->p", d, axis[blob_of])
+    tip = np.full(n, -np.inf)
+    np.maximum.at(tip, blob_of, t)
+    near_tip = arm[blob_of] & (t >= tip[blob_of] - hand_length_rel * body_heights_px[blob_of])
+    m = np.bincount(blob_of[near_tip], minlength=n)
+    ok = arm & (m > 0)
+    for k in range(2):
+        sums = np.bincount(blob_of[near_tip], pixels_px[near_tip, k], n)
+        out[ok, k] = sums[ok] / m[ok]
+    return out
+
+
 def extract_blobs(
     skin: np.ndarray,
     silhouettes: Silhouettes,
@@ -324,6 +405,18 @@ def extract_blobs(
     cents = centroids[comp].astype(np.float64)
     top = np.asarray(silhouettes.top_v_px)[sil_of - 1]
     bottom = np.asarray(silhouettes.bottom_v_px)[sil_of - 1]
+    if cfg.arm_length_rel > 0 and silhouettes.centres_px is not None:
+        ys, xs = np.nonzero(sel)
+        cents = hand_ends(
+            np.column_stack([xs, ys]).astype(np.float64),
+            remap[labels[ys, xs]],
+            cents,
+            silhouettes.centres_px[sil_of - 1],
+            bottom - top + 1.0,
+            cfg.arm_length_rel,
+            cfg.arm_max_length_rel,
+            cfg.hand_length_rel,
+        )
     rel_v = (cents[:, 1] - top) / np.maximum(bottom - top, 1.0)
     out_labels = np.zeros(n_all, np.int32)
     out_labels[comp] = np.arange(1, len(comp) + 1, dtype=np.int32)

@@ -131,6 +131,29 @@ class BlobConfig:
         min=0,
     )
 
+    arm_length_rel: float = setting(
+        0.0,
+        "a blob longer than this times its silhouette's height is a bare forearm with its hand "
+        "(short sleeves: ~0.25 of a person's height, a hand alone ~0.11); its point is then "
+        "its hand end, not its centre of mass; 0.17 suits short sleeves (0 = always the "
+        "centre of mass, the default: docs/blobs.md, 'Bare forearms')",
+        min=0.0,
+    )
+    arm_max_length_rel: float = setting(
+        0.33,
+        "... and shorter than this times its silhouette's height (a whole bare arm is ~0.33 "
+        "of a person's height; longer blobs are colour fringes along the silhouette's edge "
+        "or several limbs joined, whose ends are not hands)",
+        min=0.0,
+    )
+    hand_length_rel: float = setting(
+        0.11,
+        "... the hand end: the centre of mass of the blob's last this much (times the "
+        "silhouette's height) along its length, at the end farther from the silhouette's "
+        "centre (a hand is ~0.11 of a person's height)",
+        min=0.0,
+    )
+
     def background_requests(self) -> dict[str, bool]:
         """What this stage needs from ``BackgroundModel.step`` besides the silhouettes."""
         return {

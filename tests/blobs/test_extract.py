@@ -99,6 +99,49 @@ def test_ignores_skin_outside_silhouettes_and_computes_rel_v():
     assert blobs.bboxes_px[0].tolist() == [40, 48, 5, 5]
 
 
+def test_silhouettes_know_their_centres():
+    sil = _one_person()
+    assert sil.centres_px.tolist() == [[49.5, 50.0]]
+
+
+def test_a_bare_forearm_stands_for_its_hand_end_and_a_face_for_its_centre():
+    """Short sleeves: the forearm is skin too, and the centre of mass of forearm + hand lies
+    halfway to the elbow. An arm-shaped blob (longer than arm_length_rel x the silhouette's
+    height of 80 px, more than ARM_ASPECT times longer than wide) gives the centre of its last
+    hand_length_rel x 80 px at the end away from the body's centre (49.5, 50); a face with
+    its neck (not that elongated) and a hand alone (not that long) keep their centres."""
+    sil = _one_person()
+    skin = np.zeros((H, W), bool)
+    skin[50:74, 70:75] = True  # hanging arm beside the body: 24 x 5 px, 0.3 of the height
+    skin[12:34, 40:50] = True  # face and neck: 22 x 10 px
+    skin[50:60, 25:29] = True  # hand alone at the other side: 10 x 4 px
+    cfg = BlobConfig(
+        min_blob_area_px=1,
+        silhouette_dilate_px=0,
+        open_px=0,
+        max_blob_area_rel=0.0,
+        arm_length_rel=0.17,
+    )
+    tenth = dataclasses.replace(cfg, hand_length_rel=0.1)
+    by_size = extract_blobs(skin, sil, tenth)
+    face, arm, hand = by_size.centroids_px
+    assert arm == pytest.approx([72.0, 69.0])  # rows 65..73: within 8 px of the lower tip
+    assert face == pytest.approx([44.5, 22.5])
+    assert hand == pytest.approx([26.5, 54.5])
+    too_long = np.zeros((H, W), bool)
+    too_long[20:50, 70:75] = True  # 30 px = 0.375 of the height: no bare arm is that long
+    (point,) = extract_blobs(too_long, sil, cfg).centroids_px
+    assert point == pytest.approx([72.0, 34.5])
+    assert by_size.rel_v[1] == pytest.approx((69.0 - 10) / 80)
+    off = extract_blobs(skin, sil, dataclasses.replace(cfg, arm_length_rel=0.0))
+    assert off.centroids_px[1] == pytest.approx([72.0, 61.5])
+    raised = np.zeros((H, W), bool)
+    raised[12:36, 70:75] = True  # the same arm raised above the body's centre
+    tenth = dataclasses.replace(cfg, hand_length_rel=0.1)
+    (point,) = extract_blobs(raised, sil, tenth).centroids_px
+    assert point == pytest.approx([72.0, 16.0])
+
+
 def test_dilation_takes_in_skin_just_outside_the_silhouette():
     sil = _one_person()
     skin = np.zeros((H, W), bool)
