@@ -270,6 +270,7 @@ class Silhouettes:
         require_shape("dist_outside_px", self.dist_outside_px, self.labels.shape, np.floating)
         if self.centres_px is not None:
             require_shape("centres_px", self.centres_px, (n, 2), np.floating)
+            readonly(self.centres_px)
         readonly(self.labels, self.top_v_px, self.bottom_v_px, self.dist_outside_px)
         if self.changed is not None:
             require_shape("changed", self.changed, self.labels.shape, np.bool_)
