@@ -641,17 +641,18 @@ class MultiTargetTracker:
         total distance (Hungarian), so two targets lost together are not swapped greedily."""
         lc = self.cfg.lifecycle
         lost = [tr for tr in self._tracks.values() if tr.phase is Phase.LOST]
-        ok = [i for i, sd in enumerate(seeds) if sd.count >= lc.init_confirm_frames]
-        if not lost or not ok:
+        if not lost or not seeds:
             return {}
         last = np.array([tr.last_good_m for tr in lost])
-        sp = np.array([seeds[i].position_m for i in ok])
+        sp = np.array([sd.position_m for sd in seeds])
+        confirmed = np.array([sd.count >= lc.init_confirm_frames for sd in seeds])
         d = np.linalg.norm(last[:, None] - sp[None], axis=2)
         lost_s = np.array([(t_ns - (tr.lost_since_ns or t_ns)) * 1e-9 for tr in lost])
         gate = self._reacquire_gate_m(lost_s)
-        cost = np.where(d <= gate[:, None], d, 1e6)
+        ok = (d <= gate[:, None]) & (confirmed[None] | (d <= lc.reacquire_near_m))
+        cost = np.where(ok, d, 1e6)
         rows, cols = linear_sum_assignment(cost)
-        return {lost[r].id: ok[c] for r, c in zip(rows, cols, strict=True) if cost[r, c] < 1e6}
+        return {lost[r].id: int(c) for r, c in zip(rows, cols, strict=True) if cost[r, c] < 1e6}
 
     def _reacquire_gate_m(self, unseen_s: float | np.ndarray) -> float | np.ndarray:
         """How far from its last position a lost target may be re-acquired after ``unseen_s``:

@@ -168,6 +168,13 @@ class LifecycleConfig:
         "a lost target is re-acquired by a candidate within this of its last position, m",
         min=0.0,
     )
+    reacquire_near_m: float = setting(
+        0.0,
+        "a lost target is re-acquired at once (no init_confirm_frames wait) by a candidate "
+        "within this of its last position: the last position is the prior that makes one "
+        "observation enough (a still hand whose candidate flickers); 0 = off, m",
+        min=0.0,
+    )
     reacquire_speed_mps: float = setting(
         0.5, "the re-acquisition gate grows by this per second lost, m/s", min=0.0
     )
