@@ -369,6 +369,48 @@ def astray(
     return other <= cfg.arm_reach_m and other <= own - cfg.person_margin_m
 
 
+def owned_elsewhere(
+    holder_m: np.ndarray,
+    challenger_m: np.ndarray,
+    heads_m: np.ndarray,
+    person: int,
+    cfg: LabellingConfig,
+) -> bool:
+    """Whether a hand holding person ``person``'s slot looks like another person's, next to a
+    challenger that looks like ``person``'s own.
+
+    True when some other head is at least ``person_margin_m`` nearer the holder than its own
+    head, and the challenger is at least ``person_margin_m`` nearer that own head than the
+    holder (3-D distances). A hand held out to another person stays nearer its own head or
+    about midway; a ghost in front of the other body does not.
+
+    Parameters
+    ----------
+    holder_m, challenger_m : (3,) float64
+    heads_m : (P, 3) float64 -- every person's head
+    person : int -- index of the holder's person in ``heads_m``
+    cfg : LabellingConfig
+
+    Examples
+    --------
+    >>> heads = np.array([[1.7, 3.2, 1.7], [2.6, 3.2, 1.6]])
+    >>> owned_elsewhere(np.array([2.39, 3.18, 0.93]), np.array([1.98, 3.42, 1.11]), heads, 0,
+    ...                 LabellingConfig())
+    True
+    >>> owned_elsewhere(np.array([2.15, 3.2, 1.1]), np.array([1.98, 3.42, 1.11]), heads, 0,
+    ...                 LabellingConfig())
+    False
+    """
+    heads_m = np.asarray(heads_m, dtype=np.float64)
+    d = np.linalg.norm(heads_m - np.asarray(holder_m), axis=1)
+    own = float(d[person])
+    others = np.delete(d, person)
+    if len(others) == 0 or float(others.min()) > own - cfg.person_margin_m:
+        return False
+    mine = float(np.linalg.norm(heads_m[person] - np.asarray(challenger_m)))
+    return mine <= own - cfg.person_margin_m
+
+
 def angle_rule(
     before_a_to_b_m: np.ndarray, mode0_m: np.ndarray, mode1_m: np.ndarray
 ) -> tuple[tuple[int, int], float]:

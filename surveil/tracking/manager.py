@@ -934,7 +934,15 @@ class MultiTargetTracker:
         limbs that cross near the body -- is supported by one camera pair, a real hand by
         most pairs, whose candidates merge into a stronger one (pick_place: a ghost at hip
         height held the right hand's label at level ~0.6 while the real right hand, at ~0.9,
-        stayed unlabelled through the pick)."""
+        stayed unlabelled through the pick).
+
+        With ``contest_by_owner``, a holder also loses its slot to a challenger that is
+        clearly its person's when the holder lies nearer another person's head
+        (:func:`lab.owned_elsewhere`): a ghost in front of another body, from lines of sight
+        of two of that person's limbs, is seen by as many cameras as a real hand and as
+        strong (three_people: "p1/left_hand" on a ghost 0.94 m from p1's head and 0.63 m
+        from p2's, while p1's real left hand, 0.59 m from p1's head, stayed unlabelled, so
+        its exchange read as a handshake)."""
         lcfg = self.cfg.labelling
         if lcfg.contest_s <= 0:
             return
@@ -951,7 +959,13 @@ class MultiTargetTracker:
                 self._tracks[h]
                 for h in (p.hand_ids if p is not None else [])
                 if self._tracks[h].phase is Phase.NORMAL
-                and c.support_ema - self._tracks[h].support_ema >= lcfg.contest_margin
+                and (
+                    c.support_ema - self._tracks[h].support_ema >= lcfg.contest_margin
+                    or (
+                        lcfg.contest_by_owner
+                        and lab.owned_elsewhere(self._tracks[h].mean_m, c.mean_m, heads, k, lcfg)
+                    )
+                )
             ]
             if p is None or len(p.hand_ids) < 2 or not held:
                 c.contest_ns = None

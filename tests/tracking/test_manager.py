@@ -750,3 +750,36 @@ def test_a_real_hand_takes_its_slot_from_a_weaker_ghost(rig, contest_s):
         assert not _owner_of(out[-1], ghost).startswith("p1/")
     else:
         assert _owner_of(out[-1], ghost) == "p1/right_hand"
+
+
+@pytest.mark.parametrize(
+    ("near_m", "offset_m", "back"), [(0.0, 0.0, False), (0.1, 0.0, True), (0.1, 0.2, False)]
+)
+def test_a_still_hand_whose_candidate_flickers_is_reacquired_at_once_near_its_last_position(
+    rig, rng, near_m, offset_m, back
+):
+    # p1's left hand rests; from frame 45 its candidate (offset_m away from it) is seen only
+    # every fourth frame set (a small dark hand that the skin stage finds now and then), never
+    # three in a row
+    frames = two_people_frames(90, b_from=0)
+    rest = frames[44][1]
+    for i in range(45, 90):
+        frames[i] = [p for k, p in enumerate(frames[i]) if k != 1]
+        if i % 4 == 0:
+            frames[i].append(rest + [0.0, offset_m, 0.0])
+    cfg = TrackingConfig(
+        lifecycle=LifecycleConfig(retire_unclaimed_s=0.0, reacquire_near_m=near_m)
+    )
+    out = run(MultiTargetTracker(cfg, rig, seed=4), frames, rng)
+    hand = next(s.target_id for s in out[44].targets if s.label == "p1/left_hand")
+    phase = {i: {s.target_id: s.phase for s in f.targets}.get(hand) for i, f in enumerate(out)}
+    assert phase[47] is Phase.LOST
+    seen = [i for i in range(52, 90) if i % 4 == 0]
+    if back:  # back in the very frame set its candidate shows, with its label
+        assert all(phase[i] in (Phase.UNLABELLED, Phase.NORMAL) for i in seen)
+        assert all(phase[i + 1] is Phase.NORMAL for i in seen)
+        last = {s.target_id: s for s in out[88].targets}[hand]
+        assert last.label == "p1/left_hand" and np.linalg.norm(last.mean_m - rest) < 0.03
+    else:  # never three candidates in a row, or too far from where it was lost: stays lost
+        assert all(phase[i] is Phase.LOST for i in seen)
+    assert len({s.target_id for f in out for s in f.targets}) == 6  # no new tracker
