@@ -379,10 +379,12 @@ def owned_elsewhere(
     """Whether a hand holding person ``person``'s slot looks like another person's, next to a
     challenger that looks like ``person``'s own.
 
-    True when some other head is at least ``person_margin_m`` nearer the holder than its own
-    head, and the challenger is at least ``person_margin_m`` nearer that own head than the
-    holder (3-D distances). A hand held out to another person stays nearer its own head or
-    about midway; a ghost in front of the other body does not.
+    Ownership of a point x is s(x) = d(x, own head) - d(x, nearest other head) (3-D
+    distances; negative: nearer its own). True when the holder is at least
+    ``person_margin_m`` nearer another head (s >= margin) and the challenger's s is lower by
+    at least twice that. A hand held out to another person is about midway (s near 0); a
+    ghost in front of the other body is not, and a real hand, hanging or raised, has s well
+    below 0.
 
     Parameters
     ----------
@@ -402,13 +404,18 @@ def owned_elsewhere(
     False
     """
     heads_m = np.asarray(heads_m, dtype=np.float64)
-    d = np.linalg.norm(heads_m - np.asarray(holder_m), axis=1)
-    own = float(d[person])
-    others = np.delete(d, person)
-    if len(others) == 0 or float(others.min()) > own - cfg.person_margin_m:
+    if len(heads_m) < 2:
         return False
-    mine = float(np.linalg.norm(heads_m[person] - np.asarray(challenger_m)))
-    return mine <= own - cfg.person_margin_m
+    others = np.delete(heads_m, person, axis=0)
+
+    def ownership(x: np.ndarray) -> float:
+        x = np.asarray(x, dtype=np.float64)
+        own = float(np.linalg.norm(heads_m[person] - x))
+        return own - float(np.linalg.norm(others - x, axis=1).min())
+
+    s_holder = ownership(holder_m)
+    margin = cfg.person_margin_m
+    return s_holder >= margin and ownership(challenger_m) <= s_holder - 2 * margin
 
 
 def angle_rule(

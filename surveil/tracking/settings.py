@@ -315,9 +315,9 @@ class LabellingConfig:
     contest_by_owner: bool = setting(
         False,
         "... or that is clearly its person's (the nearest head by person_margin_m) while one of "
-        "the person's hands is nearer another person's head than its own and farther from its "
-        "own than the challenger, each by person_margin_m (a ghost on another body, as strong "
-        "as a real hand, holding the slot)",
+        "the person's hands is nearer another person's head than its own by person_margin_m "
+        "(and the challenger is clearly more the person's: see labelling.owned_elsewhere; a "
+        "ghost on another body, as strong as a real hand, holding the slot)",
     )
     contest_alpha: float = setting(
         0.1, "weight of the newest frame in the smoothed likelihood level", min=0.01, max=1.0
