@@ -313,7 +313,7 @@ class LabellingConfig:
         0.2, "... by this much smoothed likelihood level (0-1)", min=0.0
     )
     contest_by_owner: bool = setting(
-        False,
+        True,
         "... or that is clearly its person's (the nearest head by person_margin_m) while one of "
         "the person's hands is nearer another person's head than its own by person_margin_m "
         "(and the challenger is clearly more the person's: see labelling.owned_elsewhere; a "

@@ -144,3 +144,17 @@ def test_astray_needs_out_of_own_reach_and_within_anothers():
     # far from its head but nobody else's either (a tall person's hand hanging, a long reach)
     assert not lab.astray(np.array([3.0, 2.0, 0.8]), own, np.array([[4.5, 2.0, 1.7]]), cfg)
     assert not lab.astray(np.array([3.0, 2.25, 0.8]), own, np.empty((0, 3)), cfg)
+
+
+def test_owned_elsewhere_tells_a_ghost_on_another_body_from_a_hand_held_out():
+    cfg = LabellingConfig()
+    heads = np.array([[0.0, 0.0, 1.7], [1.2, 0.0, 1.7]])
+    hanging = np.array([0.0, -0.25, 0.8])  # person 0's own hand, 0.93 m from its head
+    ghost = np.array([0.85, 0.0, 0.95])  # in front of person 1's body
+    midway = np.array([0.6, 0.1, 1.1])  # held out to shake person 1's hand
+    assert lab.owned_elsewhere(ghost, hanging, heads, 0, cfg)
+    assert not lab.owned_elsewhere(midway, hanging, heads, 0, cfg)
+    # the challenger must be clearly more person 0's than the holder
+    assert not lab.owned_elsewhere(ghost, ghost + [0.05, 0, 0], heads, 0, cfg)
+    # one person alone: nothing to compare with
+    assert not lab.owned_elsewhere(ghost, hanging, heads[:1], 0, cfg)

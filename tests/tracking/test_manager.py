@@ -637,7 +637,8 @@ def test_a_hand_taken_for_the_wrong_person_is_relabelled(rig, rng, revise_s):
     head while a's own right hand is hidden: a claims it. When b's head appears and the hand
     goes home, it is out of a's reach and within b's: after reach_revise_s it loses its label
     (normal -> unlabelled) and joins b, and a's right hand, shown again, takes a's free slot
-    (with 0, never: b's hand keeps a's label)."""
+    (with 0, never: b's hand keeps a's label). The ownership contest, which would also
+    mend this, is off to test the reach rule alone."""
     a, b = body((2.0, 2.0), 0.0), body((3.0, 2.0), 180.0)
     held = np.array([2.6, 2.0, 1.1])
     frames = [[a["head"], a["left_hand"], held] for _ in range(45)]
@@ -647,7 +648,9 @@ def test_a_hand_taken_for_the_wrong_person_is_relabelled(rig, rng, revise_s):
         frames.append(
             [a["head"], a["left_hand"], a["right_hand"], b["head"], b["left_hand"], hand_b]
         )
-    cfg = TrackingConfig(labelling=LabellingConfig(reach_revise_s=revise_s))
+    cfg = TrackingConfig(
+        labelling=LabellingConfig(reach_revise_s=revise_s, contest_by_owner=False)
+    )
     out = run(MultiTargetTracker(cfg, rig, seed=12), frames, rng)
     assert _owner_of(out[44], held).startswith("p1/")  # claimed by a (the only person yet)
     revoked = [
@@ -783,3 +786,37 @@ def test_a_still_hand_whose_candidate_flickers_is_reacquired_at_once_near_its_la
     else:  # never three candidates in a row, or too far from where it was lost: stays lost
         assert all(phase[i] is Phase.LOST for i in seen)
     assert len({s.target_id for f in out for s in f.targets}) == 6  # no new tracker
+
+
+@pytest.mark.parametrize("by_owner", [False, True])
+def test_a_ghost_on_another_body_gives_its_slot_to_the_real_hand(rig, by_owner):
+    """A strong ghost (prior as high as a real hand's) joins person A as a hand while A's
+    right hand is hidden. Person B then stands right behind it: the ghost is nearer B's head
+    than A's. When A's real right hand shows, as strong as the ghost, the support contest
+    cannot tell them apart; the ownership contest gives the slot to the real hand."""
+    rng = np.random.default_rng(7)
+    a = body((2.0, 2.0), 0.0)
+    b = body((2.95, 2.0), 180.0)
+    b["head"] = b["head"] - [0, 0, 0.1]
+    ghost = np.array([2.55, 2.0, 0.95])  # 0.93 m from A's head, 0.76 m from B's
+
+    def frame(points) -> CandidateSet:
+        pts = np.array(points) + rng.normal(0, 0.005, (len(points), 3))
+        return CandidateSet(pts, np.full(len(pts), 0.95))
+
+    sets = [frame([a["head"], a["left_hand"], ghost]) for _ in range(30)]
+    with_b = [a["head"], a["left_hand"], ghost, b["head"], b["left_hand"], b["right_hand"]]
+    sets += [frame(with_b) for _ in range(10)]
+    sets += [frame([*with_b, a["right_hand"]]) for _ in range(30)]
+    cfg = TrackingConfig(labelling=LabellingConfig(contest_by_owner=by_owner))
+    trk = MultiTargetTracker(cfg, rig, seed=21)
+    out = [trk.step(i * DT_NS, c) for i, c in enumerate(sets)]
+    assert _owner_of(out[39], ghost).startswith("p1/")
+    assert _owner_of(out[-1], b["left_hand"]).startswith("p2/")
+    assert _owner_of(out[-1], b["right_hand"]).startswith("p2/")
+    if by_owner:
+        assert _owner_of(out[-1], a["right_hand"]).startswith("p1/")
+        assert not _owner_of(out[-1], ghost).startswith("p1/")
+    else:
+        assert _owner_of(out[-1], ghost).startswith("p1/")
+        assert not _owner_of(out[-1], a["right_hand"]).startswith("p1/")
