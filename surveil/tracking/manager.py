@@ -632,12 +632,13 @@ class MultiTargetTracker:
         return 2 if np.linalg.norm(pair_m - heads[seed_owner]) > lcfg.arm_reach_m else 1
 
     def _reacquire(self, seeds: list[_Pending], t_ns: int) -> dict[int, int]:
-        """Lost tracker id -> index of the confirmed seed that re-acquires it.
+        """Lost tracker id -> index of the seed that re-acquires it.
 
         A lost tracker "behaves like an uninitialised one" but with its last known position
         as a prior (section 5.2): it may take a confirmed seed within a gate around that
         position (``reacquire_gate_m``, growing by ``reacquire_speed_mps`` per second lost,
-        at most ``reacquire_max_m``). Lost trackers and seeds are matched jointly by least
+        at most ``reacquire_max_m``), or any seed, confirmed or not, within
+        ``reacquire_near_m`` of it. Lost trackers and seeds are matched jointly by least
         total distance (Hungarian), so two targets lost together are not swapped greedily."""
         lc = self.cfg.lifecycle
         lost = [tr for tr in self._tracks.values() if tr.phase is Phase.LOST]
