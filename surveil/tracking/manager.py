@@ -956,16 +956,20 @@ class MultiTargetTracker:
                 continue
             k = lab.nearest_person(c.mean_m, heads, np.zeros(len(persons), int), lcfg)
             p = persons[k] if k >= 0 else None
+            by_owner = {
+                h
+                for h in (p.hand_ids if p is not None else [])
+                if lcfg.contest_by_owner
+                and self._tracks[h].phase is Phase.NORMAL
+                and lab.owned_elsewhere(self._tracks[h].mean_m, c.mean_m, heads, k, lcfg)
+            }
             held = [
                 self._tracks[h]
                 for h in (p.hand_ids if p is not None else [])
                 if self._tracks[h].phase is Phase.NORMAL
                 and (
                     c.support_ema - self._tracks[h].support_ema >= lcfg.contest_margin
-                    or (
-                        lcfg.contest_by_owner
-                        and lab.owned_elsewhere(self._tracks[h].mean_m, c.mean_m, heads, k, lcfg)
-                    )
+                    or h in by_owner
                 )
             ]
             if p is None or len(p.hand_ids) < 2 or not held:
@@ -986,6 +990,22 @@ class MultiTargetTracker:
             p.hand_ids[p.hand_ids.index(h.id)] = c.id
             c.person, c.limb, c.attached_ns, c.contest_ns = p.number, h.limb, t_ns, None
             h.take_label_off()
+            if lcfg.owner_resides and h.id in by_owner:
+                self._reside(p, k, heads)
+
+    def _reside(self, p: _Person, k: int, heads: np.ndarray) -> None:
+        """Decide ``p``'s left and right hands afresh from its facing direction (both hands
+        tracked and sided; ``k`` indexes ``heads``, the live heads)."""
+        hands = [self._tracks[h] for h in p.hand_ids if h in self._tracks]
+        if len(hands) != 2 or any(h.limb is Limb.UNKNOWN for h in hands):
+            return
+        sides = lab.decide_left_right(
+            np.array([h.mean_m for h in hands]), heads[k], self._facing(p, heads[k])
+        )
+        if sides != tuple(h.limb for h in hands):
+            log.debug("p%d: sides decided afresh after an ownership contest", p.number)
+        for h, limb in zip(hands, sides, strict=True):
+            h.limb = limb
 
     def _yield_lost_slot(
         self,

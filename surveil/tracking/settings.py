@@ -319,6 +319,12 @@ class LabellingConfig:
         "(and the challenger is clearly more the person's: see labelling.owned_elsewhere; a "
         "ghost on another body, as strong as a real hand, holding the slot)",
     )
+    owner_resides: bool = setting(
+        False,
+        "a hand that takes a slot by ownership (contest_by_owner) does not inherit the "
+        "holder's side: the person's two hands are sided afresh from the facing direction "
+        "(the holder's side was decided where the ghost was)",
+    )
     contest_alpha: float = setting(
         0.1, "weight of the newest frame in the smoothed likelihood level", min=0.01, max=1.0
     )
