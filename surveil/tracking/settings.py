@@ -320,7 +320,7 @@ class LabellingConfig:
         "ghost on another body, as strong as a real hand, holding the slot)",
     )
     owner_resides: bool = setting(
-        False,
+        True,
         "a hand that takes a slot by ownership (contest_by_owner) does not inherit the "
         "holder's side: the person's two hands are sided afresh from the facing direction "
         "(the holder's side was decided where the ghost was)",

@@ -820,3 +820,38 @@ def test_a_ghost_on_another_body_gives_its_slot_to_the_real_hand(rig, by_owner):
     else:
         assert _owner_of(out[-1], ghost).startswith("p1/")
         assert not _owner_of(out[-1], a["right_hand"]).startswith("p1/")
+
+
+@pytest.mark.parametrize("resides", [False, True])
+def test_a_hand_that_wins_a_slot_by_ownership_is_sided_afresh(rig, resides):
+    """A ghost far out on A's left takes A's left slot, so A's real left hand, nearer the
+    middle, is sided "right". B comes and stands by the ghost; when A's real right hand
+    shows, it wins the ghost's slot by ownership. Inheriting the ghost's side would leave
+    both of A's hands wrong; sided afresh from A's facing, both are right. (A's facing is
+    the default guess, towards the middle of the cameras, which is A's true facing: the
+    hands lie on one line through the head, and the cue towards B is off.)"""
+    rng = np.random.default_rng(5)
+    a = body((2.0, 2.0), 0.0)
+    ghost = a["head"] + 0.5 * a["left"] - [0, 0, 0.75]
+    b = body((2.35, 2.75), -120.0)
+    b["head"] = b["head"] - [0, 0, 0.2]
+
+    def frame(points) -> CandidateSet:
+        pts = np.array(points) + rng.normal(0, 0.005, (len(points), 3))
+        return CandidateSet(pts, np.full(len(pts), 0.95))
+
+    sets = [frame([a["head"], a["left_hand"], ghost]) for _ in range(30)]
+    with_b = [a["head"], a["left_hand"], ghost, b["head"], b["left_hand"], b["right_hand"]]
+    sets += [frame(with_b) for _ in range(10)]
+    sets += [frame([*with_b, a["right_hand"]]) for _ in range(30)]
+    lcfg = LabellingConfig(owner_resides=resides, lr_revise_evidence=0, social_weight=0)
+    cfg = TrackingConfig(labelling=lcfg)
+    trk = MultiTargetTracker(cfg, rig, seed=21)
+    out = [trk.step(i * DT_NS, c) for i, c in enumerate(sets)]
+    assert _owner_of(out[39], ghost) == "p1/left_hand"
+    assert _owner_of(out[39], a["left_hand"]) == "p1/right_hand"
+    sides = (_owner_of(out[-1], a["left_hand"]), _owner_of(out[-1], a["right_hand"]))
+    if resides:
+        assert sides == ("p1/left_hand", "p1/right_hand")
+    else:
+        assert sides == ("p1/right_hand", "p1/left_hand")
