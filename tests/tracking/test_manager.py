@@ -788,6 +788,21 @@ def test_a_still_hand_whose_candidate_flickers_is_reacquired_at_once_near_its_la
     assert len({s.target_id for f in out for s in f.targets}) == 6  # no new tracker
 
 
+def _ghost_story(a, b, ghost, rng) -> list[CandidateSet]:
+    """70 frame sets, every point strong (prior 0.95): A's head, left hand and a ghost for
+    30; B (head, hands) joins for 10; A's right hand shows for the last 30."""
+
+    def frame(points) -> CandidateSet:
+        pts = np.array(points) + rng.normal(0, 0.005, (len(points), 3))
+        return CandidateSet(pts, np.full(len(pts), 0.95))
+
+    sets = [frame([a["head"], a["left_hand"], ghost]) for _ in range(30)]
+    with_b = [a["head"], a["left_hand"], ghost, b["head"], b["left_hand"], b["right_hand"]]
+    sets += [frame(with_b) for _ in range(10)]
+    sets += [frame([*with_b, a["right_hand"]]) for _ in range(30)]
+    return sets
+
+
 @pytest.mark.parametrize("by_owner", [False, True])
 def test_a_ghost_on_another_body_gives_its_slot_to_the_real_hand(rig, by_owner):
     """A strong ghost (prior as high as a real hand's) joins person A as a hand while A's
@@ -799,15 +814,7 @@ def test_a_ghost_on_another_body_gives_its_slot_to_the_real_hand(rig, by_owner):
     b = body((2.95, 2.0), 180.0)
     b["head"] = b["head"] - [0, 0, 0.1]
     ghost = np.array([2.55, 2.0, 0.95])  # 0.93 m from A's head, 0.76 m from B's
-
-    def frame(points) -> CandidateSet:
-        pts = np.array(points) + rng.normal(0, 0.005, (len(points), 3))
-        return CandidateSet(pts, np.full(len(pts), 0.95))
-
-    sets = [frame([a["head"], a["left_hand"], ghost]) for _ in range(30)]
-    with_b = [a["head"], a["left_hand"], ghost, b["head"], b["left_hand"], b["right_hand"]]
-    sets += [frame(with_b) for _ in range(10)]
-    sets += [frame([*with_b, a["right_hand"]]) for _ in range(30)]
+    sets = _ghost_story(a, b, ghost, rng)
     cfg = TrackingConfig(labelling=LabellingConfig(contest_by_owner=by_owner))
     trk = MultiTargetTracker(cfg, rig, seed=21)
     out = [trk.step(i * DT_NS, c) for i, c in enumerate(sets)]
@@ -835,15 +842,7 @@ def test_a_hand_that_wins_a_slot_by_ownership_is_sided_afresh(rig, resides):
     ghost = a["head"] + 0.5 * a["left"] - [0, 0, 0.75]
     b = body((2.35, 2.75), -120.0)
     b["head"] = b["head"] - [0, 0, 0.2]
-
-    def frame(points) -> CandidateSet:
-        pts = np.array(points) + rng.normal(0, 0.005, (len(points), 3))
-        return CandidateSet(pts, np.full(len(pts), 0.95))
-
-    sets = [frame([a["head"], a["left_hand"], ghost]) for _ in range(30)]
-    with_b = [a["head"], a["left_hand"], ghost, b["head"], b["left_hand"], b["right_hand"]]
-    sets += [frame(with_b) for _ in range(10)]
-    sets += [frame([*with_b, a["right_hand"]]) for _ in range(30)]
+    sets = _ghost_story(a, b, ghost, rng)
     lcfg = LabellingConfig(owner_resides=resides, lr_revise_evidence=0, social_weight=0)
     cfg = TrackingConfig(labelling=lcfg)
     trk = MultiTargetTracker(cfg, rig, seed=21)
