@@ -990,12 +990,12 @@ class MultiTargetTracker:
             p.hand_ids[p.hand_ids.index(h.id)] = c.id
             c.person, c.limb, c.attached_ns, c.contest_ns = p.number, h.limb, t_ns, None
             h.take_label_off()
-            if lcfg.owner_resides and h.id in by_owner:
-                self._reside(p, k, heads)
+            if lcfg.redecide_sides and h.id in by_owner:
+                self._redecide_sides(p, k, heads)
 
-    def _reside(self, p: _Person, k: int, heads: np.ndarray) -> None:
-        """Decide ``p``'s left and right hands afresh from its facing direction (both hands
-        tracked and sided; ``k`` indexes ``heads``, the live heads)."""
+    def _redecide_sides(self, p: _Person, k: int, heads: np.ndarray) -> None:
+        """Decide ``p``'s left and right hands afresh from its facing direction, when it has
+        two hands and both are sided (``k`` indexes ``heads``, the live heads)."""
         hands = [self._tracks[h] for h in p.hand_ids if h in self._tracks]
         if len(hands) != 2 or any(h.limb is Limb.UNKNOWN for h in hands):
             return

@@ -319,7 +319,7 @@ class LabellingConfig:
         "(and the challenger is clearly more the person's: see labelling.owned_elsewhere; a "
         "ghost on another body, as strong as a real hand, holding the slot)",
     )
-    owner_resides: bool = setting(
+    redecide_sides: bool = setting(
         True,
         "a hand that takes a slot by ownership (contest_by_owner) does not inherit the "
         "holder's side: the person's two hands are sided afresh from the facing direction "

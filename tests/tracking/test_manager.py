@@ -829,8 +829,8 @@ def test_a_ghost_on_another_body_gives_its_slot_to_the_real_hand(rig, by_owner):
         assert not _owner_of(out[-1], a["right_hand"]).startswith("p1/")
 
 
-@pytest.mark.parametrize("resides", [False, True])
-def test_a_hand_that_wins_a_slot_by_ownership_is_sided_afresh(rig, resides):
+@pytest.mark.parametrize("redecide", [False, True])
+def test_a_hand_that_wins_a_slot_by_ownership_is_sided_afresh(rig, redecide):
     """A ghost far out on A's left takes A's left slot, so A's real left hand, nearer the
     middle, is sided "right". B comes and stands by the ghost; when A's real right hand
     shows, it wins the ghost's slot by ownership. Inheriting the ghost's side would leave
@@ -843,14 +843,14 @@ def test_a_hand_that_wins_a_slot_by_ownership_is_sided_afresh(rig, resides):
     b = body((2.35, 2.75), -120.0)
     b["head"] = b["head"] - [0, 0, 0.2]
     sets = _ghost_story(a, b, ghost, rng)
-    lcfg = LabellingConfig(owner_resides=resides, lr_revise_evidence=0, social_weight=0)
+    lcfg = LabellingConfig(redecide_sides=redecide, lr_revise_evidence=0, social_weight=0)
     cfg = TrackingConfig(labelling=lcfg)
     trk = MultiTargetTracker(cfg, rig, seed=21)
     out = [trk.step(i * DT_NS, c) for i, c in enumerate(sets)]
     assert _owner_of(out[39], ghost) == "p1/left_hand"
     assert _owner_of(out[39], a["left_hand"]) == "p1/right_hand"
     sides = (_owner_of(out[-1], a["left_hand"]), _owner_of(out[-1], a["right_hand"]))
-    if resides:
+    if redecide:
         assert sides == ("p1/left_hand", "p1/right_hand")
     else:
         assert sides == ("p1/right_hand", "p1/left_hand")
