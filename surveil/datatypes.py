@@ -252,6 +252,9 @@ class Silhouettes:
         revealed background (an object taken away) from things in front of it with them.
     centres_px : (n, 2) float64 or None -- centre of mass (u, v) of each component; None when
         not known. The blob stage tells a bare forearm's hand end from its elbow end with it.
+    boxes_px : (n, 4) int32 or None -- x, y, width, height of a box holding each component
+        (its bounding box, or one a little larger); None when not known (then read from
+        ``labels``). Skin and blobs are computed inside these boxes only (:meth:`boxes`).
     """
 
     labels: np.ndarray
@@ -261,10 +264,14 @@ class Silhouettes:
     changed: np.ndarray | None = None
     background_edges: np.ndarray | None = None
     centres_px: np.ndarray | None = None
+    boxes_px: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         require_shape("labels", self.labels, (None, None), np.integer)
         n = len(self.top_v_px)
+        if self.boxes_px is not None:
+            require_shape("boxes_px", self.boxes_px, (n, 4), np.integer)
+            readonly(self.boxes_px)
         require_shape("top_v_px", self.top_v_px, (n,), np.floating)
         require_shape("bottom_v_px", self.bottom_v_px, (n,), np.floating)
         require_shape("dist_outside_px", self.dist_outside_px, self.labels.shape, np.floating)
@@ -287,6 +294,73 @@ class Silhouettes:
     def mask(self) -> np.ndarray:
         """(H, W) bool foreground."""
         return self.labels > 0
+
+    def boxes(self, margin_px: int) -> np.ndarray:
+        """(k, 4) int64 x0, y0, x1, y1 (end exclusive) of boxes that hold every silhouette
+        pixel and everything within ``margin_px`` of one, clipped to the frame; k = 0 when
+        there is no silhouette. One box per component when ``boxes_px`` is known, else one
+        around them all.
+
+        >>> lab = np.zeros((10, 12), np.int32); lab[2:5, 3:6] = 1
+        >>> s = Silhouettes(lab, np.array([2.0]), np.array([4.0]), np.zeros((10, 12), np.float32))
+        >>> s.boxes(1).tolist()
+        [[2, 1, 7, 6]]
+        """
+        h, w = self.labels.shape
+        if self.n == 0:
+            return np.zeros((0, 4), np.int64)
+        if self.boxes_px is not None:
+            x, y, bw, bh = self.boxes_px.astype(np.int64).T
+        else:
+            fg = self.labels > 0
+            rows, cols = np.flatnonzero(fg.any(axis=1)), np.flatnonzero(fg.any(axis=0))
+            x, y = cols[:1].astype(np.int64), rows[:1].astype(np.int64)
+            bw, bh = cols[-1:] + 1 - x, rows[-1:] + 1 - y
+        out = np.stack(
+            [
+                np.clip(x - margin_px, 0, w),
+                np.clip(y - margin_px, 0, h),
+                np.clip(x + bw + margin_px, 0, w),
+                np.clip(y + bh + margin_px, 0, h),
+            ],
+            axis=1,
+        )
+        return out[(out[:, 2] > out[:, 0]) & (out[:, 3] > out[:, 1])]
+
+    def region(self, margin_px: int) -> tuple[slice, slice] | None:
+        """(rows, cols) of the one box around :meth:`boxes` (``margin_px``), or None when
+        there is no silhouette."""
+        b = self.boxes(margin_px)
+        if len(b) == 0:
+            return None
+        return slice(int(b[:, 1].min()), int(b[:, 3].max())), slice(
+            int(b[:, 0].min()), int(b[:, 2].max())
+        )
+
+    def crop(self, region: tuple[slice, slice]) -> Silhouettes:
+        """These silhouettes seen through ``region`` (rows, cols): arrays cut to it, rows,
+        centres and boxes moved to its coordinates."""
+        rows, cols = region
+        y0, x0 = rows.start, cols.start
+        shift = np.array([x0, y0])
+
+        def cut(a: np.ndarray | None) -> np.ndarray | None:
+            return None if a is None else a[rows, cols]
+
+        return Silhouettes(
+            self.labels[rows, cols],
+            self.top_v_px - y0,
+            self.bottom_v_px - y0,
+            self.dist_outside_px[rows, cols],
+            cut(self.changed),
+            cut(self.background_edges),
+            None if self.centres_px is None else self.centres_px - shift,
+            None
+            if self.boxes_px is None
+            else np.column_stack([self.boxes_px[:, :2] - shift, self.boxes_px[:, 2:]]).astype(
+                np.int32
+            ),
+        )
 
 
 @dataclass(frozen=True, slots=True)

@@ -22,7 +22,7 @@ import numpy as np
 
 from surveil.activity import ActivityEngine, RuleSet
 from surveil.blobs.background import BackgroundModel, learning_frames_after
-from surveil.blobs.extract import extract_blobs
+from surveil.blobs.extract import blob_margin_px, extract_blobs
 from surveil.blobs.settings import BackgroundConfig, BlobConfig
 from surveil.blobs.skin import SkinModel, default_skin_model
 from surveil.camera import Rig
@@ -150,7 +150,9 @@ class Pipeline:
             t0 = time.perf_counter()
             silhouettes = bg.step(img, **self.cfg.blobs.background_requests())
             t1 = time.perf_counter()
-            skin = self.skin_models[cam].classify(img)
+            skin = self.skin_models[cam].classify(
+                img, silhouettes.boxes(blob_margin_px(self.cfg.blobs, img.shape[1]))
+            )
             t2 = time.perf_counter()
             n_people = self.cfg.people_hint or max(silhouettes.n, self._n_heads, 1)
             blobs = extract_blobs(skin, silhouettes, self.cfg.blobs, n_people, img)

@@ -1,7 +1,7 @@
 """Per-camera observations: silhouettes, skin and skin blobs (paper 004 sections 6.1-6.2)."""
 
 from surveil.blobs.background import BackgroundModel, silhouettes_from_mask
-from surveil.blobs.extract import extract_blobs, observe
+from surveil.blobs.extract import blob_margin_px, extract_blobs, observe
 from surveil.blobs.settings import BackgroundConfig, BlobConfig, SkinConfig
 from surveil.blobs.skin import (
     SkinModel,
@@ -18,6 +18,7 @@ __all__ = [
     "BlobConfig",
     "SkinConfig",
     "SkinModel",
+    "blob_margin_px",
     "colour_features",
     "compile_skin_lut",
     "default_skin_model",

@@ -80,7 +80,24 @@ def silhouettes_from_mask(foreground: np.ndarray, min_area_px: int) -> Silhouett
         dist = cv2.distanceTransform(outside, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
     else:
         dist = np.full((h, w), np.hypot(h, w), np.float32)
-    return Silhouettes(labels, top, bottom, dist, centres_px=centres[keep].astype(np.float64))
+    return Silhouettes(
+        labels,
+        top,
+        bottom,
+        dist,
+        centres_px=centres[keep].astype(np.float64),
+        boxes_px=stats[keep, :4].astype(np.int32),
+    )
+
+
+def _scale_boxes(boxes_px: np.ndarray, sx: float, sy: float) -> np.ndarray:
+    """(n, 4) x, y, w, h boxes of a mask resized by (sx, sy): boxes that hold every pixel the
+    nearest-neighbour resize maps from them (one pixel of slack on each side)."""
+    x0 = np.floor(boxes_px[:, 0] * sx) - 1
+    y0 = np.floor(boxes_px[:, 1] * sy) - 1
+    x1 = np.ceil((boxes_px[:, 0] + boxes_px[:, 2]) * sx) + 1
+    y1 = np.ceil((boxes_px[:, 1] + boxes_px[:, 3]) * sy) + 1
+    return np.column_stack([x0, y0, x1 - x0, y1 - y0]).astype(np.int32)
 
 
 def learning_frames_after(cfg: BackgroundConfig, framesets_before: int) -> int:
@@ -223,4 +240,5 @@ class BackgroundModel:
             ).view(bool),
             edges,
             None if small.centres_px is None else (small.centres_px + 0.5) * (sx, sy) - 0.5,
+            None if small.boxes_px is None else _scale_boxes(small.boxes_px, sx, sy),
         )

@@ -324,6 +324,59 @@ def extract_blobs(
     ([[2.5, 2.5]], [4], [0.214])
     """
     require_shape("skin", skin, silhouettes.labels.shape, np.bool_)
+    if bgr is not None:
+        require_shape("bgr", bgr, (*skin.shape, 3), np.uint8)
+    region = silhouettes.region(blob_margin_px(cfg, skin.shape[1]))
+    if region is None:
+        return _empty_blobs(skin.shape)
+    # everything happens near people: on the box around them (the margin keeps every step's
+    # reach inside it, so the blobs are those of the whole frame), then back to the frame
+    rows, cols = region
+    shift = np.array([cols.start, rows.start])
+    crop = _extract(
+        skin[region],
+        silhouettes.crop(region),
+        cfg,
+        n_people_hint,
+        None if bgr is None else bgr[region],
+        _open_radius_px(cfg, skin.shape[1]),
+    )
+    labels = np.zeros(skin.shape, np.int32)
+    labels[region] = crop.labels
+    boxes = crop.bboxes_px.copy()
+    boxes[:, :2] += shift.astype(np.int32)
+    return BlobSet(
+        crop.centroids_px + shift,
+        crop.areas_px,
+        boxes,
+        crop.silhouette,
+        crop.rel_v,
+        labels,
+    )
+
+
+def blob_margin_px(cfg: BlobConfig, width_px: int) -> int:
+    """How far from a silhouette the blob stage looks, px: its dilation, the opening, the
+    ghost test's outline and Sobel stencil, plus slack. Skin beyond this never matters."""
+    return cfg.silhouette_dilate_px + _open_radius_px(cfg, width_px) + OUTLINE_PX + 4
+
+
+def _open_radius_px(cfg: BlobConfig, width_px: int) -> int:
+    # the kernel is given for 640-pixel-wide frames: limbs shrink with the frame, and at
+    # 320x240 (hands ~6 px) a 3-px opening would erase them
+    return round((cfg.open_px - 1) / 2 * width_px / REFERENCE_WIDTH_PX)
+
+
+def _extract(
+    skin: np.ndarray,
+    silhouettes: Silhouettes,
+    cfg: BlobConfig,
+    n_people_hint: int | None,
+    bgr: np.ndarray | None,
+    radius_px: int,
+) -> BlobSet:
+    """:func:`extract_blobs` on one region (``radius_px``: the opening's, from the frame's
+    width)."""
     shape = skin.shape
     sil = silhouettes.labels
     if cfg.silhouette_dilate_px > 0 and silhouettes.n:
@@ -339,9 +392,6 @@ def extract_blobs(
             kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (d, d))
             changed = cv2.dilate(changed.view(np.uint8), kernel).view(bool)
         inside &= changed
-    # the kernel is given for 640-pixel-wide frames: limbs shrink with the frame, and at
-    # 320x240 (hands ~6 px) a 3-px opening would erase them
-    radius_px = round((cfg.open_px - 1) / 2 * shape[1] / REFERENCE_WIDTH_PX)
     if radius_px > 0:
         inside = _open(inside, 2 * radius_px + 1)
     n_all, labels, stats, centroids = components_with_stats(inside)
@@ -440,6 +490,6 @@ def observe(
 ) -> CameraObservation:
     """One camera frame -> silhouettes (updating ``background_model``), skin, blobs."""
     silhouettes = background_model.step(bgr, **cfg.background_requests())
-    skin = skin_model.classify(bgr)
+    skin = skin_model.classify(bgr, silhouettes.boxes(blob_margin_px(cfg, bgr.shape[1])))
     blobs = extract_blobs(skin, silhouettes, cfg, n_people_hint, bgr)
     return CameraObservation(camera, silhouettes, skin, blobs)

@@ -83,14 +83,29 @@ class SkinModel:
         require_shape("lut", self.lut, (n, n, n), np.bool_)
         readonly(self.lut)
 
-    def classify(self, bgr: np.ndarray) -> np.ndarray:
+    def classify(self, bgr: np.ndarray, boxes: np.ndarray | None = None) -> np.ndarray:
         """(H, W) bool skin mask of an (H, W, 3) uint8 BGR image (one lookup per pixel).
 
-        >>> m = SkinModel(np.zeros((32, 32, 32), bool), 5)
+        boxes : (k, 4) int x0, y0, x1, y1 (end exclusive), optional -- classify only inside
+            them (``Silhouettes.boxes``: skin matters only in and near people, a small part
+            of most frames); pixels outside every box are False
+
+        >>> m = SkinModel(np.ones((32, 32, 32), bool), 5)
         >>> m.classify(np.zeros((2, 3, 3), np.uint8)).shape
         (2, 3)
+        >>> box = np.array([[1, 0, 3, 1]])  # x0, y0, x1, y1
+        >>> m.classify(np.zeros((2, 3, 3), np.uint8), box).astype(int).tolist()
+        [[0, 1, 1], [0, 0, 0]]
         """
         require_shape("bgr", bgr, (None, None, 3), np.uint8)
+        if boxes is None:
+            return self._lookup(bgr)
+        out = np.zeros(bgr.shape[:2], np.bool_)
+        for x0, y0, x1, y1 in np.asarray(boxes, np.int64).reshape(-1, 4).tolist():
+            out[y0:y1, x0:x1] = self._lookup(bgr[y0:y1, x0:x1])
+        return out
+
+    def _lookup(self, bgr: np.ndarray) -> np.ndarray:
         s = 8 - self.bits
         q = (bgr >> np.uint8(s)).astype(np.int32)
         # flat index b * n^2 + g * n + r

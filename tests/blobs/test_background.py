@@ -36,6 +36,28 @@ def test_moving_rectangle_gives_one_silhouette_in_place(rng):
     assert sil.labels.dtype == np.int32 and sil.dist_outside_px.dtype == np.float32
 
 
+@pytest.mark.parametrize("scale", [1.0, 0.5, 0.3])
+def test_silhouette_boxes_hold_every_silhouette_pixel(rng, scale):
+    """Skin and blobs are computed inside these boxes only: a pixel outside would be lost.
+    At model_scale < 1 the mask is resized back, so the boxes are scaled with slack."""
+    cfg = BackgroundConfig(learning_frames=20, min_person_area_px=100, model_scale=scale)
+    model = BackgroundModel(cfg, (H, W))
+    _, frame = _scene(rng)
+    _learn(model, frame)
+    img = frame()
+    img[30:90, 23:41] = (20, 200, 40)
+    img[50:103, 101:133] = (200, 30, 160)
+    sil = model.step(img)
+    assert sil.n == 2 and sil.boxes_px is not None
+    covered = np.zeros((H, W), bool)
+    for x0, y0, x1, y1 in sil.boxes(0):
+        covered[y0:y1, x0:x1] = True
+    assert covered[sil.labels > 0].all()
+    # and not much more than the people (the frame is 5.5 times their area)
+    area = sum((x1 - x0) * (y1 - y0) for x0, y0, x1, y1 in sil.boxes(0))
+    assert area < 1.5 * (60 * 18 + 53 * 32)
+
+
 def test_thin_arm_held_out_stays_in_the_silhouette(rng):
     # a 3-px-wide arm (about 1.5 px in the half-size mask) reaching out of a body must stay
     # foreground: a 3-px opening erased such arms, and with them hands held against them

@@ -222,3 +222,39 @@ def test_empty_input_gives_empty_blobset():
 def test_wrong_skin_shape_names_argument():
     with pytest.raises(ValueError, match="skin"):
         extract_blobs(np.zeros((H, W + 1), bool), _one_person(), BlobConfig())
+
+
+def test_blobs_found_near_people_are_those_of_the_whole_frame(small_recording):
+    """extract_blobs works on the box around the silhouettes (plus blob_margin_px) and the
+    skin model classifies only there; on rendered frames (upscaled to 640 px wide so that
+    the opening acts) this gives exactly the blobs of the whole frame with all its skin."""
+    import cv2
+
+    from surveil.blobs import BackgroundConfig, BackgroundModel, blob_margin_px
+    from surveil.blobs.extract import _extract, _open_radius_px
+    from surveil.blobs.skin import default_skin_model
+    from surveil.io.recording import open_recording
+
+    rec = open_recording(small_recording)
+    cfg = BlobConfig()
+    skin_model = default_skin_model()
+    models: dict[str, BackgroundModel] = {}
+    compared = 0
+    for fs in rec.framesets():
+        for cam, small in fs.images.items():
+            img = cv2.resize(small, (640, 480), interpolation=cv2.INTER_LINEAR)
+            bg = models.setdefault(cam, BackgroundModel(BackgroundConfig(), img.shape[:2]))
+            sil = bg.step(img, **cfg.background_requests())
+            if bg.learning or sil.n == 0:
+                continue
+            skin_near = skin_model.classify(img, sil.boxes(blob_margin_px(cfg, 640)))
+            got = extract_blobs(skin_near, sil, cfg, None, img)
+            want = _extract(
+                skin_model.classify(img), sil, cfg, None, img, _open_radius_px(cfg, 640)
+            )
+            np.testing.assert_allclose(got.centroids_px, want.centroids_px, atol=1e-9)
+            for field in ("areas_px", "bboxes_px", "silhouette", "labels"):
+                np.testing.assert_array_equal(getattr(got, field), getattr(want, field))
+            np.testing.assert_allclose(got.rel_v, want.rel_v, atol=1e-12)
+            compared += len(want)
+    assert compared > 100  # blobs, not empty frames, were compared
