@@ -89,11 +89,15 @@ def split_by_colour(bgr: np.ndarray, mask: np.ndarray, min_delta: float) -> np.n
     rg = px[:, [2, 1]] / np.maximum(px.sum(axis=1, keepdims=True), 1.0)
     lo, hi = np.percentile(rg[:, 0], [10.0, 90.0])
     centres = np.stack([rg[rg[:, 0] <= lo].mean(axis=0), rg[rg[:, 0] >= hi].mean(axis=0)])
+    r, g = rg[:, 0].astype(np.float64), rg[:, 1].astype(np.float64)
     for _ in range(10):
-        near = np.argmin(((rg[:, None, :] - centres[None]) ** 2).sum(axis=2), axis=1)
-        new = np.stack(
-            [rg[near == j].mean(axis=0) if np.any(near == j) else centres[j] for j in (0, 1)]
-        )
+        # nearer the second centre <=> beyond the bisector: one dot product per pixel
+        (r0, g0), (r1, g1) = centres
+        bound = 0.5 * ((r1 * r1 + g1 * g1) - (r0 * r0 + g0 * g0))
+        near = ((r * (r1 - r0) + g * (g1 - g0)) > bound).astype(np.intp)
+        counts = np.bincount(near, minlength=2)
+        sums = np.stack([np.bincount(near, r, 2), np.bincount(near, g, 2)], axis=1)
+        new = np.where(counts[:, None] > 0, sums / np.maximum(counts, 1)[:, None], centres)
         if np.allclose(new, centres, atol=1e-3):
             break
         centres = new
