@@ -19,12 +19,22 @@ def require_shape(
     """
     if not isinstance(arr, np.ndarray):
         raise TypeError(f"{name} must be a numpy array, got {type(arr).__name__}")
-    if arr.ndim != len(shape) or any(
-        s not in (None, a) for s, a in zip(shape, arr.shape, strict=False)
+    got = arr.shape
+    if len(got) != len(shape) or any(
+        s is not None and s != a for s, a in zip(shape, got, strict=True)
     ):
-        raise ValueError(f"{name} must have shape {shape} (None = any), got {arr.shape}")
-    if not np.issubdtype(arr.dtype, kind):
+        raise ValueError(f"{name} must have shape {shape} (None = any), got {got}")
+    # called ~100 times per frame set on the hot path: np.issubdtype costs more than the
+    # rest of the check, and the (dtype, kind) pairs seen are few
+    key = (arr.dtype, kind)
+    ok = _KIND_OK.get(key)
+    if ok is None:
+        ok = _KIND_OK[key] = bool(np.issubdtype(arr.dtype, kind))
+    if not ok:
         raise TypeError(f"{name} must have a {kind.__name__} dtype, got {arr.dtype}")
+
+
+_KIND_OK: dict[tuple[np.dtype, type], bool] = {}
 
 
 def require_finite(name: str, arr: np.ndarray) -> None:
