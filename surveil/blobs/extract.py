@@ -413,7 +413,6 @@ def _extract(
         if len(too_big) and bgr is not None and cfg.split_min_delta > 0:
             # the face or hands of a person in skin-coloured clothes join it: split such
             # regions by colour and size the pieces again
-            require_shape("bgr", bgr, (*shape, 3), np.uint8)
             split = False
             for k in too_big:
                 x, y, w, h = stats[k + 1, :4]
@@ -430,7 +429,6 @@ def _extract(
         ok = ok[areas[ok] <= limit]
     edges = silhouettes.background_edges
     if cfg.ghost_edge_ratio > 0 and edges is not None and bgr is not None and len(ok):
-        require_shape("bgr", bgr, (*shape, 3), np.uint8)
         ghosts = revealed_background(
             labels,
             ok + 1,
