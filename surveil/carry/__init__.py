@@ -2,13 +2,16 @@
 
 from surveil.carry.analysis import (
     CarryAnalyser,
+    HandSpot,
     HandView,
     analyse_hand_view,
     choose_radius,
     circle_box,
     find_hand_blob,
     hand_region,
+    hand_view,
     is_analysed_hand,
+    locate_hand,
     reliability,
     rim_background_fraction,
 )
@@ -26,6 +29,7 @@ from surveil.carry.settings import CarryConfig
 __all__ = [
     "CarryAnalyser",
     "CarryConfig",
+    "HandSpot",
     "HandView",
     "HueWindow",
     "analyse_hand_view",
@@ -37,8 +41,10 @@ __all__ = [
     "find_modes",
     "fuse_distributions",
     "hand_region",
+    "hand_view",
     "hue_histogram",
     "is_analysed_hand",
+    "locate_hand",
     "pixel_hue_codes",
     "region_mode_pdf",
     "reliability",

@@ -302,6 +302,174 @@ def projected_radius_px(
     return float(min(max(r, cfg.min_radius_px), cfg.max_radius_px))
 
 
+@dataclass(frozen=True, slots=True)
+class HandSpot:
+    """Where one hand is in one camera and the circle around it (steps 1-4 of
+    docs/carry.md): enough to tell which views are ambiguous before any colour work.
+
+    camera : str
+    centre_px : (2,) float64 -- circle centre (u, v), full-image pixels
+    radius_px : float -- the radius chosen by the adaptation
+    rho : float -- reliability of eq. 28
+    blob_label : int -- the hand's blob in ``BlobSet.labels``
+    depth_m : float -- the hand's depth in the camera, metres
+    roi : (slice, slice) -- rows and columns of the region of interest in the image
+    """
+
+    camera: str
+    centre_px: np.ndarray
+    radius_px: float
+    rho: float
+    blob_label: int
+    depth_m: float
+    roi: tuple[slice, slice]
+
+
+def locate_hand(
+    observation: CameraObservation, camera: Camera, hand_m: np.ndarray, cfg: CarryConfig
+) -> HandSpot | None:
+    """The hand's blob, circle and reliability in one camera (sections 7.2.1 and 7.3).
+
+    Parameters
+    ----------
+    observation : CameraObservation
+        The camera's silhouettes and blobs.
+    camera : Camera
+    hand_m : (3,) float
+        The hand, world frame, metres.
+    cfg : CarryConfig
+
+    Returns
+    -------
+    HandSpot or None
+        None when the hand projects outside the image or no skin blob lies near it.
+    """
+    return locate_hands(observation, camera, np.asarray(hand_m, np.float64).reshape(1, 3), cfg)[0]
+
+
+def locate_hands(
+    observation: CameraObservation, camera: Camera, hands_m: np.ndarray, cfg: CarryConfig
+) -> list[HandSpot | None]:
+    """:func:`locate_hand` for several hands ((N, 3) world, metres), projected at once."""
+    px, depth = camera.project(np.asarray(hands_m, np.float64).reshape(-1, 3))
+    seen = camera.in_image(px, depth)
+    return [
+        _spot(observation, camera, px[i], float(depth[i]), cfg) if seen[i] else None
+        for i in range(len(px))
+    ]
+
+
+def _spot(
+    observation: CameraObservation, camera: Camera, uv: np.ndarray, z: float, cfg: CarryConfig
+) -> HandSpot | None:
+    """:func:`locate_hand` for a hand that projects to ``uv`` (in the image) at depth ``z``."""
+    r_lo = projected_radius_px(camera, cfg.min_radius_m, z, cfg)
+    r_hi = projected_radius_px(camera, cfg.max_radius_m, z, cfg)
+    search = max(camera.K[0, 0] * cfg.blob_search_m / z, 1.5)
+    h, w = observation.blobs.labels.shape
+    half = int(np.ceil(2.0 * r_hi + search)) + 1
+    uc, vc = int(round(uv[0])), int(round(uv[1]))
+    x0, x1 = max(uc - half, 0), min(uc + half + 1, w)
+    y0, y1 = max(vc - half, 0), min(vc + half + 1, h)
+    origin = np.array([x0, y0], np.float64)
+    blob_labels = observation.blobs.labels[y0:y1, x0:x1]
+    hand_px = uv - origin
+    label = find_hand_blob(blob_labels, hand_px, search)
+    if label == 0:
+        return None
+    # the blob's pixels in the region of interest lie in its bounding box: compare there only
+    bx, by, bw, bh = (int(v) for v in observation.blobs.bboxes_px[label - 1])
+    r0, c0 = max(by - y0, 0), max(bx - x0, 0)
+    rows, cols = np.nonzero(blob_labels[r0 : by + bh - y0, c0 : bx + bw - x0] == label)
+    rows, cols = rows + r0, cols + c0
+    # centre on the blob's pixels near the hand (a bare forearm must not drag the circle away)
+    du, dv = cols - hand_px[0], rows - hand_px[1]
+    d2 = du * du + dv * dv
+    for reach in (r_lo, r_hi):
+        near = d2 <= reach**2
+        if near.any():
+            rows, cols = rows[near], cols[near]
+            break
+    centre = np.array([cols.mean(), rows.mean()])
+    r_blob = float(np.sqrt(np.max((cols - centre[0]) ** 2 + (rows - centre[1]) ** 2))) + 0.5
+    r_small = min(max(r_lo, r_blob), r_hi)
+    radii = np.linspace(r_small, r_hi, cfg.n_radius_steps)
+    foreground = observation.silhouettes.labels[y0:y1, x0:x1] > 0
+    bg = rim_background_fraction(foreground, centre, radii, cfg.n_rim_samples)
+    k = choose_radius(bg, cfg.grow_stop_bg, cfg.inside_bg)
+    return HandSpot(
+        camera=camera.name,
+        centre_px=centre + origin,
+        radius_px=float(radii[k]),
+        rho=float(reliability(bg[k], cfg.rho_min)),
+        blob_label=label,
+        depth_m=z,
+        roi=(slice(y0, y1), slice(x0, x1)),
+    )
+
+
+def hand_view(
+    bgr: np.ndarray, observation: CameraObservation, spot: HandSpot, cfg: CarryConfig
+) -> HandView:
+    """The hue distribution of a located hand's region (sections 7.2.1-7.2.2).
+
+    Only the region of interest is processed, and most of the work only on the bounding box
+    of the circle; the extent test of :func:`~surveil.carry.hue.connected_modes` looks at the
+    whole region of interest.
+
+    Parameters
+    ----------
+    bgr : (H, W, 3) uint8
+        The camera image.
+    observation : CameraObservation
+        Its silhouettes, skin mask and blobs.
+    spot : HandSpot
+        The hand in this camera (:func:`locate_hand`).
+    cfg : CarryConfig
+    """
+    roi = spot.roi
+    origin = np.array([roi[1].start, roi[0].start], np.float64)
+    centre = spot.centre_px - origin
+    foreground = observation.silhouettes.labels[roi] > 0
+    skin = observation.skin[roi]
+    blob = observation.blobs.labels[roi] == spot.blob_label
+    # The region lies inside the circle, so it is built on the circle's box (shifting the
+    # centre by the box's integer origin is exact: the same circle). Only the extent test
+    # looks further, at the person's non-skin pixels in the whole region of interest; the
+    # region is a subset of them, so one hue-code image serves both.
+    box = circle_box(centre, spot.radius_px, foreground.shape)
+    box_origin = np.array([box[1].start, box[0].start], np.float64)
+    region = hand_region(
+        foreground[box], skin[box], blob[box], centre - box_origin, spot.radius_px
+    )
+    person_codes = pixel_hue_codes(
+        bgr[roi], cfg.min_saturation, cfg.min_value, mask=foreground & ~skin
+    )
+    pdf, modes = region_mode_pdf(
+        person_codes[box],
+        region,
+        n_bins=cfg.hue_bins,
+        sigma_deg=cfg.kde_sigma_deg,
+        min_peak=cfg.mode_min_peak,
+        halfwidth_deg=cfg.mode_halfwidth_deg,
+        min_pixels=cfg.mode_min_pixels,
+        outer_hue_codes=person_codes,
+        region_box=box,
+        max_extent=cfg.max_mode_extent,
+    )
+    return HandView(
+        camera=spot.camera,
+        centre_px=spot.centre_px,
+        radius_px=spot.radius_px,
+        rho=spot.rho,
+        pdf=pdf,
+        modes_deg=modes,
+        n_region_px=int(np.count_nonzero(region)),
+        blob_label=spot.blob_label,
+        depth_m=spot.depth_m,
+    )
+
+
 def analyse_hand_view(
     bgr: np.ndarray,
     observation: CameraObservation,
@@ -309,11 +477,8 @@ def analyse_hand_view(
     hand_m: np.ndarray,
     cfg: CarryConfig,
 ) -> HandView | None:
-    """Hue distribution and reliability of one hand in one camera (sections 7.2-7.3).
-
-    Only a region of interest around the projected hand is processed, and most of the work
-    only on the bounding box of the chosen circle; the extent test of
-    :func:`~surveil.carry.hue.connected_modes` looks at the whole region of interest.
+    """Hue distribution and reliability of one hand in one camera (sections 7.2-7.3):
+    :func:`locate_hand`, then :func:`hand_view`.
 
     Parameters
     ----------
@@ -331,77 +496,8 @@ def analyse_hand_view(
     HandView or None
         None when the hand projects outside the image or no skin blob lies near it.
     """
-    px, depth = camera.project(np.asarray(hand_m, np.float64).reshape(1, 3))
-    if not camera.in_image(px, depth)[0]:
-        return None
-    z = float(depth[0])
-    uv = px[0]
-    r_lo = projected_radius_px(camera, cfg.min_radius_m, z, cfg)
-    r_hi = projected_radius_px(camera, cfg.max_radius_m, z, cfg)
-    search = max(camera.K[0, 0] * cfg.blob_search_m / z, 1.5)
-    h, w = bgr.shape[:2]
-    half = int(np.ceil(2.0 * r_hi + search)) + 1
-    uc, vc = int(round(uv[0])), int(round(uv[1]))
-    x0, x1 = max(uc - half, 0), min(uc + half + 1, w)
-    y0, y1 = max(vc - half, 0), min(vc + half + 1, h)
-    origin = np.array([x0, y0], np.float64)
-    blob_labels = observation.blobs.labels[y0:y1, x0:x1]
-    hand_px = uv - origin
-    label = find_hand_blob(blob_labels, hand_px, search)
-    if label == 0:
-        return None
-    blob = blob_labels == label
-    rows, cols = np.nonzero(blob)
-    # centre on the blob's pixels near the hand (a bare forearm must not drag the circle away)
-    du, dv = cols - hand_px[0], rows - hand_px[1]
-    d2 = du * du + dv * dv
-    for reach in (r_lo, r_hi):
-        near = d2 <= reach**2
-        if near.any():
-            rows, cols = rows[near], cols[near]
-            break
-    centre = np.array([cols.mean(), rows.mean()])
-    r_blob = float(np.sqrt(np.max((cols - centre[0]) ** 2 + (rows - centre[1]) ** 2))) + 0.5
-    r_small = min(max(r_lo, r_blob), r_hi)
-    radii = np.linspace(r_small, r_hi, cfg.n_radius_steps)
-    foreground = observation.silhouettes.labels[y0:y1, x0:x1] > 0
-    bg = rim_background_fraction(foreground, centre, radii, cfg.n_rim_samples)
-    k = choose_radius(bg, cfg.grow_stop_bg, cfg.inside_bg)
-    radius = float(radii[k])
-    skin = observation.skin[y0:y1, x0:x1]
-    # The region lies inside the circle, so it is built on the circle's box (shifting the
-    # centre by the box's integer origin is exact: the same circle). Only the extent test
-    # looks further, at the person's non-skin pixels in the whole region of interest; the
-    # region is a subset of them, so one hue-code image serves both.
-    box = circle_box(centre, radius, foreground.shape)
-    box_origin = np.array([box[1].start, box[0].start], np.float64)
-    region = hand_region(foreground[box], skin[box], blob[box], centre - box_origin, radius)
-    person_codes = pixel_hue_codes(
-        bgr[y0:y1, x0:x1], cfg.min_saturation, cfg.min_value, mask=foreground & ~skin
-    )
-    pdf, modes = region_mode_pdf(
-        person_codes[box],
-        region,
-        n_bins=cfg.hue_bins,
-        sigma_deg=cfg.kde_sigma_deg,
-        min_peak=cfg.mode_min_peak,
-        halfwidth_deg=cfg.mode_halfwidth_deg,
-        min_pixels=cfg.mode_min_pixels,
-        outer_hue_codes=person_codes,
-        region_box=box,
-        max_extent=cfg.max_mode_extent,
-    )
-    return HandView(
-        camera=camera.name,
-        centre_px=centre + origin,
-        radius_px=radius,
-        rho=float(reliability(bg[k], cfg.rho_min)),
-        pdf=pdf,
-        modes_deg=modes,
-        n_region_px=int(np.count_nonzero(region)),
-        blob_label=label,
-        depth_m=z,
-    )
+    spot = locate_hand(observation, camera, hand_m, cfg)
+    return None if spot is None else hand_view(bgr, observation, spot, cfg)
 
 
 def dress_view_hist(
@@ -448,8 +544,11 @@ def dress_view_hist(
     xx = np.arange(cols.start, cols.stop)[None, :]
     mask = (xx - centre[0]) ** 2 + (yy - centre[1]) ** 2 <= radius**2
     mask &= (observation.silhouettes.labels[rows, cols] > 0) & ~observation.skin[rows, cols]
-    for u, v, r in np.zeros((0, 3)) if exclude_circles is None else exclude_circles:
-        mask &= (xx - u) ** 2 + (yy - v) ** 2 > r * r
+    if exclude_circles is not None and len(exclude_circles):
+        # only circles that reach the region can take pixels out of it
+        gaps = np.hypot(exclude_circles[:, 0] - centre[0], exclude_circles[:, 1] - centre[1])
+        for u, v, r in exclude_circles[gaps < radius + exclude_circles[:, 2]]:
+            mask &= (xx - u) ** 2 + (yy - v) ** 2 > r * r
     if not mask.any():
         return np.zeros(cfg.hue_bins), 0
     codes = pixel_hue_codes(bgr[rows, cols], cfg.min_saturation, cfg.min_value, mask=mask)
@@ -583,13 +682,13 @@ class CarryAnalyser:
             cam = self._cams.get(cam_name)
             if obs is None or cam is None:
                 continue
-            views = {}
-            for j in np.flatnonzero(active):
-                view = analyse_hand_view(img, obs, cam, pos[j], cfg)
-                if view is not None:
-                    views[int(j)] = view
-            for j in _unambiguous_views(views, self._frozen_circles(cam, pos, ~active)):
-                self._hands[ids[j]].window.push(t_ns, views[j].rho, views[j].pdf)
+            todo = np.flatnonzero(active)
+            located = locate_hands(obs, cam, pos[todo], cfg)
+            spots = {int(j): sp for j, sp in zip(todo, located, strict=True) if sp is not None}
+            # colour work only for the views that count (~15-25 % are ambiguous)
+            for j in _unambiguous_views(spots, self._frozen_circles(cam, pos, ~active)):
+                view = hand_view(img, obs, spots[j], cfg)
+                self._hands[ids[j]].window.push(t_ns, view.rho, view.pdf)
         fused = {tid: self._hands[tid].window.fused(t_ns, self._window_ns) for tid in ids}
         if cfg.subtract_dress:
             self._update_dress(t_ns, images, observations, targets, pos)
@@ -736,7 +835,7 @@ class CarryAnalyser:
 
 
 def _unambiguous_views(
-    views: Mapping[int, HandView], obstacles: np.ndarray | None = None
+    views: Mapping[int, HandSpot], obstacles: np.ndarray | None = None
 ) -> list[int]:
     """Keys of the views that may feed their hand's window.
 

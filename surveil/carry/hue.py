@@ -11,6 +11,8 @@ centred on ``i * 360 / B`` degrees and covers half a bin either side, so bin 0 s
 
 from __future__ import annotations
 
+import functools
+
 import cv2
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
@@ -199,10 +201,25 @@ def code_density(
     [2.0, 1.0, 0.0, 0.0]
     """
     counts = np.bincount(hue_codes.reshape(-1), minlength=256)[: len(HUE_CODE_DEG)]
-    hist = hue_histogram(
-        HUE_CODE_DEG, n_bins, n_total=1 if n_total is None else n_total, weights=counts
+    # binning and smoothing are linear: one (180, B) table does both (a few microseconds,
+    # against ~60 for the histogram and scipy's filter; it runs ~15 times per frame set)
+    density = counts @ _code_density_table(n_bins, float(sigma_deg))
+    return density if n_total is None else density / float(n_total)
+
+
+@functools.cache
+def _code_density_table(n_bins: int, sigma_deg: float) -> np.ndarray:
+    """(180, n_bins) read-only: row c is the smoothed histogram of one pixel of hue code c,
+    so that ``counts @ table`` is :func:`smooth_circular` of :func:`hue_histogram` of the
+    pixels counted per code (the same numbers up to rounding)."""
+    table = np.stack(
+        [
+            smooth_circular(hue_histogram(HUE_CODE_DEG[c : c + 1], n_bins, n_total=1), sigma_deg)
+            for c in range(len(HUE_CODE_DEG))
+        ]
     )
-    return smooth_circular(hist, sigma_deg)
+    readonly(table)
+    return table
 
 
 def smooth_circular(hist: np.ndarray, sigma_deg: float) -> np.ndarray:
@@ -406,11 +423,13 @@ def connected_modes(
         if keep[k] and extent_test:
             far = is_near[outer_hue_codes]
             far[region_box] |= near
-            n_far, far_patches = cv2.connectedComponents(far.view(np.uint8), connectivity=8)
+            n_far, far_patches, stats, _ = cv2.connectedComponentsWithStats(
+                far.view(np.uint8), connectivity=8
+            )
             reached = np.zeros(n_far, bool)
             reached[far_patches[region_box][near]] = True
             reached[0] = False
-            keep[k] = np.count_nonzero(reached[far_patches]) <= max_extent * n_near
+            keep[k] = stats[reached, cv2.CC_STAT_AREA].sum() <= max_extent * n_near
     return keep
 
 

@@ -19,8 +19,12 @@ from surveil.carry import (
     circle_box,
     find_hand_blob,
     hand_region,
+    hand_view,
+    locate_hand,
     rim_background_fraction,
 )
+from surveil.carry import analysis as carry_analysis
+from surveil.carry.analysis import locate_hands
 from surveil.datatypes import CameraObservation, Limb, Phase, TargetSnapshot
 
 W, H = 320, 240
@@ -151,6 +155,44 @@ def test_no_blob_near_the_hand_means_not_visible(camera):
     assert analyse_hand_view(img, obs, camera, far, CarryConfig()) is None
     behind = np.array([0.0, -4.0, 1.0])
     assert analyse_hand_view(img, obs, camera, behind, CarryConfig()) is None
+
+
+def test_located_together_or_one_at_a_time_the_views_are_the_same(camera):
+    img, obs = make_frame(camera)
+    hands = np.array([HAND_M, HAND_M + [0.0, 0.0, 0.5], [0.0, -4.0, 1.0], HAND_M + [0.02, 0, 0]])
+    cfg = CarryConfig()
+    together = locate_hands(obs, camera, hands, cfg)
+    alone = [locate_hand(obs, camera, h, cfg) for h in hands]
+    assert [s is None for s in together] == [False, True, True, False]
+    for a, b in zip(together, alone, strict=True):
+        assert (a is None and b is None) or (
+            a.blob_label == b.blob_label
+            and a.roi == b.roi
+            and np.array_equal(a.centre_px, b.centre_px)
+            and (a.radius_px, a.rho, a.depth_m) == (b.radius_px, b.rho, b.depth_m)
+        )
+    view = hand_view(img, obs, together[0], cfg)
+    ref = analyse_hand_view(img, obs, camera, HAND_M, cfg)
+    assert np.array_equal(view.pdf, ref.pdf) and view.rho == ref.rho
+
+
+def test_a_blob_two_hands_claim_feeds_only_the_nearer_one(camera, monkeypatch):
+    """A hand hidden behind another in this camera projects onto the other's blob: the blob
+    and its box belong to the nearer hand, and the hidden one is not colour-analysed."""
+    calls = []
+
+    def counting_view(*args, **kwargs):
+        calls.append(args[2].depth_m)
+        return hand_view(*args, **kwargs)
+
+    monkeypatch.setattr(carry_analysis, "hand_view", counting_view)
+    behind = camera.centre_m + 1.4 * (HAND_M - camera.centre_m)  # same pixel, farther
+    analyser = CarryAnalyser(CarryConfig(), Rig((camera,)))
+    targets = [hand_target(1, 1, Limb.RIGHT_HAND), hand_target(2, 2, Limb.LEFT_HAND, behind)]
+    out = run(analyser, [make_frame(camera)] * 5, targets)
+    assert out[1].carrying and abs(out[1].hue_deg - 120.0) < 5.0
+    assert not out[2].carrying and out[2].confidence == 0.0
+    assert len(calls) == 5 and max(calls) < 3.5  # the nearer hand's view, once per frame set
 
 
 def test_end_to_end_green_box_is_carried_and_bare_hand_is_not(camera):

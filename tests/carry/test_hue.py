@@ -10,6 +10,7 @@ from surveil.carry.hue import (
     HUE_CODE_DEG,
     NO_HUE,
     circular_distance_deg,
+    code_density,
     codes_near_hues,
     connected_modes,
     find_modes,
@@ -103,6 +104,25 @@ def test_smoothing_wraps_and_keeps_mass():
     assert s.sum() == pytest.approx(1.0)
     assert s[1] == pytest.approx(s[179]) and s[1] > 0  # symmetric across 0/360
     assert find_modes(s).tolist() == [0]
+
+
+@pytest.mark.parametrize("n_bins", [180, 90, 36])
+@pytest.mark.parametrize("sigma_deg", [0.0, 4.0, 6.0])
+def test_code_density_is_the_smoothed_histogram_of_the_codes(n_bins, sigma_deg):
+    """The one-table shortcut gives the histogram of the pixels' hues, smoothed."""
+    rng = np.random.default_rng(3)
+    codes = rng.integers(0, 180, (40, 30)).astype(np.uint8)
+    codes[rng.random(codes.shape) < 0.3] = NO_HUE
+    codes[5:15, 5:15] = 7  # a patch of one hue: a peak for the smoothing to spread
+    has_hue = codes != NO_HUE
+    expected = smooth_circular(
+        hue_histogram(HUE_CODE_DEG[codes[has_hue]], n_bins, n_total=codes.size), sigma_deg
+    )
+    got = code_density(codes, n_bins, sigma_deg, n_total=codes.size)
+    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-15)
+    assert got.sum() == pytest.approx(has_hue.mean())
+    counts = code_density(codes, n_bins, sigma_deg)  # no total: pixel counts
+    np.testing.assert_allclose(counts, expected * codes.size, rtol=1e-12, atol=1e-12)
 
 
 def test_modes_on_both_sides_of_zero_merge_into_one_mode_at_zero():
