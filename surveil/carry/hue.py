@@ -65,10 +65,11 @@ def pixel_hue_codes(
     # admit pixels just below the threshold
     s_min = int(np.ceil(min_saturation * 255.0))
     v_min = int(np.ceil(min_value * 255.0))
-    has_hue = cv2.inRange(hsv, (0, s_min, v_min), (255, 255, 255)) > 0
+    has_hue = cv2.inRange(hsv, (0, s_min, v_min), (255, 255, 255))  # 255 = has a hue
     if mask is not None:
-        has_hue &= mask
-    return np.where(has_hue, hsv[..., 0], np.uint8(NO_HUE))
+        has_hue = cv2.bitwise_and(has_hue, has_hue, mask=mask.view(np.uint8))
+    # hue | 0 = hue where it has one, hue | 255 = NO_HUE elsewhere (OpenCV: ~4x numpy's where)
+    return cv2.bitwise_or(cv2.extractChannel(hsv, 0), cv2.bitwise_not(has_hue))
 
 
 def codes_near_hues(hues_deg: np.ndarray, halfwidth_deg: float) -> np.ndarray:
@@ -412,8 +413,9 @@ def connected_modes(
                 f"{outer_hue_codes.shape}, got {region_box}"
             )
     # a handful of modes; each test is one OpenCV call (two with the extent test)
-    for k, is_near in enumerate(codes_near_hues(modes, halfwidth_deg)):
-        near = is_near[hue_codes]
+    # the per-pixel table lookups go through OpenCV (~4x numpy's fancy indexing)
+    for k, is_near in enumerate(codes_near_hues(modes, halfwidth_deg).view(np.uint8)):
+        near = cv2.LUT(hue_codes, is_near).view(bool)
         n_near = np.count_nonzero(near)
         if n_near < min_pixels:
             continue
@@ -421,7 +423,7 @@ def connected_modes(
         patch_px = np.bincount(patches.reshape(-1), minlength=n_patches)
         keep[k] = patch_px[1:].max() >= min_pixels
         if keep[k] and extent_test:
-            far = is_near[outer_hue_codes]
+            far = cv2.LUT(outer_hue_codes, is_near).view(bool)
             far[region_box] |= near
             n_far, far_patches, stats, _ = cv2.connectedComponentsWithStats(
                 far.view(np.uint8), connectivity=8
