@@ -478,24 +478,8 @@ def analyse_hand_view(
     cfg: CarryConfig,
 ) -> HandView | None:
     """Hue distribution and reliability of one hand in one camera (sections 7.2-7.3):
-    :func:`locate_hand`, then :func:`hand_view`.
-
-    Parameters
-    ----------
-    bgr : (H, W, 3) uint8
-        The camera image.
-    observation : CameraObservation
-        Its silhouettes, skin mask and blobs.
-    camera : Camera
-    hand_m : (3,) float
-        The hand, world frame, metres.
-    cfg : CarryConfig
-
-    Returns
-    -------
-    HandView or None
-        None when the hand projects outside the image or no skin blob lies near it.
-    """
+    :func:`locate_hand` (same arguments, and its None when the hand is not seen), then
+    :func:`hand_view` on ``bgr``, the (H, W, 3) uint8 camera image."""
     spot = locate_hand(observation, camera, hand_m, cfg)
     return None if spot is None else hand_view(bgr, observation, spot, cfg)
 
