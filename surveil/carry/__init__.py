@@ -12,6 +12,7 @@ from surveil.carry.analysis import (
     hand_view,
     is_analysed_hand,
     locate_hand,
+    locate_hands,
     reliability,
     rim_background_fraction,
 )
@@ -45,6 +46,7 @@ __all__ = [
     "hue_histogram",
     "is_analysed_hand",
     "locate_hand",
+    "locate_hands",
     "pixel_hue_codes",
     "region_mode_pdf",
     "reliability",

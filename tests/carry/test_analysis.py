@@ -21,10 +21,10 @@ from surveil.carry import (
     hand_region,
     hand_view,
     locate_hand,
+    locate_hands,
     rim_background_fraction,
 )
 from surveil.carry import analysis as carry_analysis
-from surveil.carry.analysis import locate_hands
 from surveil.datatypes import CameraObservation, Limb, Phase, TargetSnapshot
 
 W, H = 320, 240
