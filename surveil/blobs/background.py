@@ -56,9 +56,8 @@ def silhouettes_from_mask(foreground: np.ndarray, min_area_px: int) -> Silhouett
     -------
     Silhouettes
         Labels 1..n in the order OpenCV found them (raster order of their first pixel);
-        ``dist_outside_px`` is the Euclidean distance to the nearest silhouette pixel (a 5x5
-        chamfer approximation, within 2 %), or the image diagonal everywhere when there is
-        no silhouette.
+        ``dist_outside_px`` is the Euclidean distance to the nearest silhouette pixel, or the
+        image diagonal everywhere when there is no silhouette.
 
     >>> m = np.zeros((20, 20), bool); m[5:15, 8:12] = True
     >>> s = silhouettes_from_mask(m, 10)
@@ -78,9 +77,7 @@ def silhouettes_from_mask(foreground: np.ndarray, min_area_px: int) -> Silhouett
     bottom = top + stats[keep, cv2.CC_STAT_HEIGHT] - 1
     if len(keep):
         outside = (labels == 0).astype(np.uint8)
-        # the 5x5 chamfer mask is within 0.4 px of the exact distance where p_b (width 6 px)
-        # is not negligible, at half the cost of DIST_MASK_PRECISE (docs/blobs.md)
-        dist = cv2.distanceTransform(outside, cv2.DIST_L2, cv2.DIST_MASK_5)
+        dist = cv2.distanceTransform(outside, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
     else:
         dist = np.full((h, w), np.hypot(h, w), np.float32)
     return Silhouettes(
@@ -234,11 +231,8 @@ class BackgroundModel:
             cv2.resize(small.labels, size, interpolation=cv2.INTER_NEAREST),
             small.top_v_px * sy,
             (small.bottom_v_px + 1.0) * sy - 1.0,
-            cv2.resize(
-                small.dist_outside_px * np.float32(0.5 * (sx + sy)),
-                size,
-                interpolation=cv2.INTER_LINEAR,
-            ),
+            cv2.resize(small.dist_outside_px, size, interpolation=cv2.INTER_LINEAR)
+            * np.float32(0.5 * (sx + sy)),
             None
             if changed_small is None
             else cv2.resize(

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from surveil.blobs import BackgroundConfig, BackgroundModel
-from surveil.blobs.background import learning_frames_after, silhouettes_from_mask
+from surveil.blobs.background import learning_frames_after
 
 H, W = 120, 160
 
@@ -34,20 +34,6 @@ def test_moving_rectangle_gives_one_silhouette_in_place(rng):
     assert sil.dist_outside_px[60, x + 10] == 0
     assert sil.dist_outside_px[60, x + 40] == pytest.approx(20, abs=2)
     assert sil.labels.dtype == np.int32 and sil.dist_outside_px.dtype == np.float32
-
-
-def test_distance_outside_is_within_two_percent_of_the_exact_distance(rng):
-    from scipy.ndimage import distance_transform_edt
-
-    mask = np.zeros((H, W), bool)
-    for _ in range(6):  # blobs of assorted shapes: every direction to the nearest pixel
-        y, x = rng.integers(10, H - 10), rng.integers(10, W - 10)
-        mask[y - rng.integers(1, 8) : y + rng.integers(1, 8), x - rng.integers(1, 8) : x] = True
-    dist = silhouettes_from_mask(mask, 1).dist_outside_px
-    exact = distance_transform_edt(~mask)
-    assert (dist[mask] == 0).all()
-    near = exact < 40  # the range where p_b (width 6 px) matters, and then some
-    np.testing.assert_allclose(dist[near], exact[near], rtol=0.02, atol=0.05)
 
 
 @pytest.mark.parametrize("scale", [1.0, 0.5, 0.3])
