@@ -109,7 +109,7 @@ class Thresholds:
         0.3, "pick/place: how long the hand must stay still, s", min=0.01, max=10.0
     )
     shoulder_drop_m: float = setting(
-        0.2,
+        0.24,
         "pick/place: the still hand must be below shoulder height = head height minus this, m",
         min=-1.0,
         max=1.0,

@@ -91,7 +91,7 @@ class CarryConfig:
         "hand that gave an object away comes back to the shirt)",
     )
     dress_drops_m: tuple[float, ...] = setting(
-        (0.35, 0.75), "dress regions are centred this far below the head (chest, hips), m"
+        (0.39, 0.79), "dress regions are centred this far below the head centre (chest, hips), m"
     )
     dress_radius_m: float = setting(0.12, "radius of each dress region, m", min=0.01)
     dress_time_s: float = setting(

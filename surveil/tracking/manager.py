@@ -1375,14 +1375,16 @@ class MultiTargetTracker:
         targets = []
         blocks, owners = [], []
         for idx, (tid, tr) in enumerate(self._tracks.items()):
-            mean = tr.last_good_m if tr.phase is Phase.LOST else tr.mean_m
+            mean = (tr.last_good_m if tr.phase is Phase.LOST else tr.mean_m).copy()
+            if tr.limb is Limb.HEAD:
+                mean[2] += self.cfg.head_centre_rise_m
             targets.append(
                 TargetSnapshot(
                     target_id=tid,
                     person=tr.person,
                     limb=tr.limb,
                     phase=tr.phase,
-                    mean_m=mean.copy(),
+                    mean_m=mean,
                     cov_m2=tr.cov_m2.copy(),
                 )
             )

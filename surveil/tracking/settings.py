@@ -393,3 +393,11 @@ class TrackingConfig:
     labelling: LabellingConfig = setting(
         default_factory=LabellingConfig, doc="head / hand, person, left / right labels"
     )
+    head_centre_rise_m: float = setting(
+        0.04,
+        "a head target's reported position is its skin point raised by this much: the skin "
+        "a head shows is the face (or the neck and ears from behind), below the head's centre "
+        "under the hair; docs/tracking.md, 'Head centre', m",
+        min=-0.2,
+        max=0.2,
+    )

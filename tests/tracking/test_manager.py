@@ -107,8 +107,13 @@ def test_two_people_are_labelled_and_grouped(rig, rng):
     out = run(trk, two_people_frames(75, b_from=20), rng)
     a, b = body((2.0, 2.0), 0.0), body((3.2, 2.0), 180.0)
     labels = by_label(out[-1])
-    expected = {f"p1/{k}": a[k] for k in ("head", "left_hand", "right_hand")}
-    expected |= {f"p2/{k}": b[k] for k in ("head", "left_hand", "right_hand")}
+    # the candidates are skin points: a head's face lies below its centre, so a head is
+    # reported raised by head_centre_rise_m and a hand where its skin is
+    rise = np.array([0.0, 0.0, LONE.head_centre_rise_m])
+    expected = {f"p1/{k}": a[k] for k in ("left_hand", "right_hand")}
+    expected |= {f"p2/{k}": b[k] for k in ("left_hand", "right_hand")}
+    expected |= {"p1/head": a["head"] + rise, "p2/head": b["head"] + rise}
+    assert LONE.head_centre_rise_m > 0
     assert set(labels) == set(expected)
     for lbl, pos in expected.items():
         assert np.linalg.norm(labels[lbl] - pos) < 0.03, lbl
