@@ -10,6 +10,7 @@ from __future__ import annotations
 import logging
 import os
 import shutil
+import signal
 import socket
 import subprocess
 import sys
@@ -126,7 +127,11 @@ def screenshot(
     ]
     logfile = png.with_suffix(".viewer.log")
     with open(logfile, "w") as err:
-        proc = subprocess.Popen(cmd, stdout=err, stderr=subprocess.STDOUT)
+        # its own process group: the ``rerun`` beside Python is a wrapper script that starts
+        # the viewer binary as a child, which outlives the wrapper's terminate()
+        proc = subprocess.Popen(
+            cmd, stdout=err, stderr=subprocess.STDOUT, start_new_session=os.name == "posix"
+        )
     try:
         client = _connect(ViewerClient, port, proc, timeout_s, logfile)
         client.open(str(path))
@@ -142,16 +147,43 @@ def screenshot(
         time.sleep(settle_s)
         client.save_screenshot(str(png))
     finally:
-        proc.terminate()
-        try:
-            proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
+        stop_process_group(proc)
     if not png.is_file():
         raise ViewerError(f"the viewer wrote no screenshot {png}; see {logfile}")
     logfile.unlink(missing_ok=True)
     return png
+
+
+def stop_process_group(proc: subprocess.Popen, timeout_s: float = 10.0) -> None:
+    """Terminate ``proc`` and, on POSIX, every process of its group (it must have been started
+    with ``start_new_session=True``); kill them if they outlast ``timeout_s``."""
+
+    def signal_all(sig: int) -> None:
+        if os.name == "posix":
+            try:
+                os.killpg(proc.pid, sig)
+            except ProcessLookupError:
+                pass
+        else:
+            proc.send_signal(sig)
+
+    signal_all(signal.SIGTERM)
+    try:
+        proc.wait(timeout=timeout_s)
+    except subprocess.TimeoutExpired:
+        signal_all(signal.SIGKILL if os.name == "posix" else signal.SIGTERM)
+        proc.wait()
+    if os.name == "posix":
+        # the group's other members (the viewer binary under the wrapper) may outlive the
+        # wrapper by a moment; make sure none is left
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            try:
+                os.killpg(proc.pid, 0)
+            except ProcessLookupError:
+                return
+            time.sleep(0.05)
+        signal_all(signal.SIGKILL)
 
 
 def _connect(client_cls, port: int, proc: subprocess.Popen, timeout_s: float, logfile: Path):
