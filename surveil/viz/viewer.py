@@ -156,16 +156,16 @@ def screenshot(
 
 def stop_process_group(proc: subprocess.Popen, timeout_s: float = 10.0) -> None:
     """Terminate ``proc`` and, on POSIX, every process of its group (it must have been started
-    with ``start_new_session=True``); kill them if they outlast ``timeout_s``."""
+    with ``start_new_session=True``); kill them if ``proc`` outlasts ``timeout_s``."""
 
     def signal_all(sig: int) -> None:
-        if os.name == "posix":
-            try:
-                os.killpg(proc.pid, sig)
-            except ProcessLookupError:
-                pass
-        else:
+        if os.name != "posix":
             proc.send_signal(sig)
+            return
+        try:
+            os.killpg(proc.pid, sig)
+        except ProcessLookupError:  # the whole group has exited already
+            pass
 
     signal_all(signal.SIGTERM)
     try:
@@ -173,17 +173,6 @@ def stop_process_group(proc: subprocess.Popen, timeout_s: float = 10.0) -> None:
     except subprocess.TimeoutExpired:
         signal_all(signal.SIGKILL if os.name == "posix" else signal.SIGTERM)
         proc.wait()
-    if os.name == "posix":
-        # the group's other members (the viewer binary under the wrapper) may outlive the
-        # wrapper by a moment; make sure none is left
-        deadline = time.monotonic() + timeout_s
-        while time.monotonic() < deadline:
-            try:
-                os.killpg(proc.pid, 0)
-            except ProcessLookupError:
-                return
-            time.sleep(0.05)
-        signal_all(signal.SIGKILL)
 
 
 def _connect(client_cls, port: int, proc: subprocess.Popen, timeout_s: float, logfile: Path):

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import subprocess
+import time
 from pathlib import Path
 
 import pytest
@@ -33,6 +34,9 @@ def test_stopping_a_wrapper_stops_the_child_it_started():
     assert _alive(child)
     stop_process_group(proc, timeout_s=5.0)
     assert proc.returncode is not None
+    deadline = time.monotonic() + 5.0  # the signal reaches the child asynchronously
+    while _alive(child) and time.monotonic() < deadline:
+        time.sleep(0.02)
     assert not _alive(child)
     proc.stdout.close()
 
