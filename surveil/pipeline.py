@@ -116,6 +116,9 @@ class Pipeline:
         self.activity = ActivityEngine(rules)
         self._n_heads = 0
         self._n_framesets = 0  # frame sets stepped since the start (or reset)
+        # the previous frame set's heads and hands of people: the background model does not
+        # learn the silhouettes that hold them
+        self._people_m = np.zeros((0, 3))
 
     @classmethod
     def for_recording(cls, recording: Recording, cfg: PipelineConfig, rules: RuleSet) -> Pipeline:
@@ -133,6 +136,15 @@ class Pipeline:
         self.activity.reset()
         self._n_heads = 0
         self._n_framesets = 0
+        self._people_m = np.zeros((0, 3))
+
+    def _people_px(self, cam: str) -> np.ndarray:
+        """(N, 2) where the previous frame set's people (heads and hands of labelled
+        persons) project in camera ``cam``, pixels; only points in front of it."""
+        if len(self._people_m) == 0:
+            return np.zeros((0, 2))
+        px, depth = self.rig[cam].project(self._people_m)
+        return px[depth > 0]
 
     def _observe(self, fs: FrameSet, timings: dict[str, float]) -> dict[str, CameraObservation]:
         observations = {}
@@ -148,7 +160,11 @@ class Pipeline:
                     learning_frames_after(self.cfg.background, self._n_framesets),
                 )
             t0 = time.perf_counter()
-            silhouettes = bg.step(img, **self.cfg.blobs.background_requests())
+            silhouettes = bg.step(
+                img,
+                **self.cfg.blobs.background_requests(),
+                people_px=self._people_px(cam),
+            )
             t1 = time.perf_counter()
             skin = self.skin_models[cam].classify(
                 img, silhouettes.boxes(blob_margin_px(self.cfg.blobs, img.shape[1]))
@@ -182,6 +198,9 @@ class Pipeline:
         self._n_heads = sum(
             1 for t in track.targets if t.limb is Limb.HEAD and t.phase is not Phase.LOST
         )
+        self._people_m = np.array(
+            [t.mean_m for t in track.targets if t.person > 0 and t.phase is not Phase.LOST]
+        ).reshape(-1, 3)
         carry = {}
         if self.cfg.carry_enabled and not learning:
             carry = self.carry.step(fs.t_ns, fs.images, observations, track.targets)

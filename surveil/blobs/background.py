@@ -154,6 +154,7 @@ class BackgroundModel:
         # kernels are in full-resolution pixels: scale them with the frame
         self._open = _ellipse(round(cfg.open_px * scale))
         self._close = _ellipse(round(cfg.close_px * scale) | 1 if cfg.close_px else 0)
+        self._people_grow = _ellipse(round(cfg.people_margin_px * scale) * 2 + 1)
         self.reset()
 
     def reset(self) -> None:
@@ -167,6 +168,9 @@ class BackgroundModel:
         self.n_frames = 0
         self._edges: np.ndarray | None = None
         self._edges_frame = 0
+        self._background: np.ndarray | None = None  # MOG2's background image, model size
+        self._background_frame = 0
+        self._unlearnt = 0  # frames since the model last learnt (held back for people)
 
     @property
     def learning(self) -> bool:
@@ -180,7 +184,7 @@ class BackgroundModel:
         if self.learning:
             return None
         if self._edges is None or self.n_frames - self._edges_frame >= self.cfg.edges_every_frames:
-            image = self._mog.getBackgroundImage()
+            image = self._background_image()
             if self._small_size is not None:
                 image = cv2.resize(image, self.shape[::-1], interpolation=cv2.INTER_LINEAR)
             self._edges = sobel_magnitude(cv2.cvtColor(image, cv2.COLOR_BGR2GRAY))
@@ -188,8 +192,46 @@ class BackgroundModel:
             self._edges_frame = self.n_frames
         return self._edges
 
+    def _background_image(self) -> np.ndarray:
+        """(h, w, 3) uint8 MOG2's background image at the model's size, read again every
+        ``cfg.edges_every_frames`` frames (reading it costs about 0.7 ms; it changes slowly)."""
+        stale = self.n_frames - self._background_frame >= self.cfg.edges_every_frames
+        if self._background is None or stale:
+            self._background = self._mog.getBackgroundImage()
+            self._background_frame = self.n_frames
+        return self._background
+
+    def _learn_around(self, small: np.ndarray, labels: np.ndarray, people_px: np.ndarray) -> None:
+        """Let MOG2 learn from ``small`` (the frame at model size) every
+        ``cfg.people_update_every`` frames, with the silhouettes that hold a tracked person's
+        limb (``people_px``, model pixels) painted over with the background image: people
+        are never learnt into the background, however long they stay. The rate is the
+        per-frame rate times the frames since the model last learnt, so the rest of the
+        scene adapts as fast as without people."""
+        self._unlearnt += 1
+        if self._unlearnt < self.cfg.people_update_every:
+            return
+        h, w = labels.shape
+        uv = np.rint(people_px).astype(np.intp)
+        inside = (uv[:, 0] >= 0) & (uv[:, 0] < w) & (uv[:, 1] >= 0) & (uv[:, 1] < h)
+        ids = np.unique(labels[uv[inside, 1], uv[inside, 0]])
+        ids = ids[ids > 0]
+        frame = small
+        if len(ids):
+            keep_out = np.isin(labels, ids).view(np.uint8)
+            if self._people_grow is not None:
+                keep_out = cv2.dilate(keep_out, self._people_grow)
+            frame = small.copy()
+            np.copyto(frame, self._background_image(), where=keep_out.view(bool)[..., None])
+        self._mog.apply(frame, learningRate=min(1.0, self.cfg.learning_rate * self._unlearnt))
+        self._unlearnt = 0
+
     def step(
-        self, bgr: np.ndarray, changed: bool = False, background_edges: bool = False
+        self,
+        bgr: np.ndarray,
+        changed: bool = False,
+        background_edges: bool = False,
+        people_px: np.ndarray | None = None,
     ) -> Silhouettes:
         """Update the model with one frame and return its person silhouettes.
 
@@ -200,13 +242,29 @@ class BackgroundModel:
             before the clean-up; the blob stage asks for it when ``change_dilate_px`` >= 0)
         background_edges : also return ``Silhouettes.background_edges``
             (:meth:`background_edges`; the blob stage's ghost test)
+        people_px : (N, 2) float, optional -- where tracked people's heads and hands project
+            in this frame, (u, v) frame pixels. After the learning phase the silhouettes
+            that hold one of them are not learnt into the background (``cfg.protect_people``;
+            docs/blobs.md, "People are not background"). None or empty: the whole frame is
+            learnt, as MOG2 does by itself.
         """
         require_shape("bgr", bgr, (*self.shape, 3), np.uint8)
         rate = self.cfg.learning_rate_initial if self.learning else self.cfg.learning_rate
         small = bgr
         if self._small_size is not None:
             small = cv2.resize(bgr, self._small_size, interpolation=cv2.INTER_AREA)
-        raw = self._mog.apply(small, learningRate=rate)
+        protect = (
+            self.cfg.protect_people
+            and not self.learning
+            and people_px is not None
+            and len(people_px) > 0
+        )
+        if protect:
+            # detect without learning; the model learns below, around the people
+            raw = self._mog.apply(small, learningRate=0.0)
+        else:
+            raw = self._mog.apply(small, learningRate=rate)
+            self._unlearnt = 0
         self.n_frames += 1
         changed_small = raw != 0 if changed else None
         edges = self.background_edges() if background_edges else None
@@ -216,22 +274,25 @@ class BackgroundModel:
         if self._close is not None:
             fg = cv2.morphologyEx(fg, cv2.MORPH_CLOSE, self._close)
         if self._small_size is None:
-            return dataclasses.replace(
-                silhouettes_from_mask(fg, self.cfg.min_person_area_px),
-                changed=changed_small,
-                background_edges=edges,
-            )
+            full = silhouettes_from_mask(fg, self.cfg.min_person_area_px)
+            if protect:
+                self._learn_around(small, full.labels, np.asarray(people_px, np.float64))
+            return dataclasses.replace(full, changed=changed_small, background_edges=edges)
         # components and distances on the small mask too (they cost more than MOG2 at full
         # size), then scaled back to frame pixels
         sx = self.shape[1] / self._small_size[0]
         sy = self.shape[0] / self._small_size[1]
-        small = silhouettes_from_mask(fg, round(self.cfg.min_person_area_px / (sx * sy)))
+        sil_small = silhouettes_from_mask(fg, round(self.cfg.min_person_area_px / (sx * sy)))
+        if protect:
+            # pixel centres: u_small = (u + 0.5) / sx - 0.5
+            at = (np.asarray(people_px, np.float64) + 0.5) / (sx, sy) - 0.5
+            self._learn_around(small, sil_small.labels, at)
         size = self.shape[::-1]
         return Silhouettes(
-            cv2.resize(small.labels, size, interpolation=cv2.INTER_NEAREST),
-            small.top_v_px * sy,
-            (small.bottom_v_px + 1.0) * sy - 1.0,
-            cv2.resize(small.dist_outside_px, size, interpolation=cv2.INTER_LINEAR)
+            cv2.resize(sil_small.labels, size, interpolation=cv2.INTER_NEAREST),
+            sil_small.top_v_px * sy,
+            (sil_small.bottom_v_px + 1.0) * sy - 1.0,
+            cv2.resize(sil_small.dist_outside_px, size, interpolation=cv2.INTER_LINEAR)
             * np.float32(0.5 * (sx + sy)),
             None
             if changed_small is None
@@ -239,6 +300,6 @@ class BackgroundModel:
                 changed_small.view(np.uint8), size, interpolation=cv2.INTER_NEAREST
             ).view(bool),
             edges,
-            None if small.centres_px is None else (small.centres_px + 0.5) * (sx, sy) - 0.5,
-            None if small.boxes_px is None else _scale_boxes(small.boxes_px, sx, sy),
+            None if sil_small.centres_px is None else (sil_small.centres_px + 0.5) * (sx, sy) - 0.5,
+            None if sil_small.boxes_px is None else _scale_boxes(sil_small.boxes_px, sx, sy),
         )

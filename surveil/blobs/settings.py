@@ -55,6 +55,24 @@ class BackgroundConfig:
     )
     close_px: int = setting(9, "elliptical closing kernel diameter, px (0 = none)", min=0)
     min_person_area_px: int = setting(400, "smallest silhouette kept, px", min=0)
+    protect_people: bool = setting(
+        True,
+        "after the learning phase, silhouettes that hold a tracked person's head or hand are "
+        "not learnt into the background (without it, people who stay in one place fade "
+        "from the foreground within a minute)",
+    )
+    people_update_every: int = setting(
+        4,
+        "while people are protected the model learns every this many frames, at that many "
+        "times learning_rate (each learning step costs one more MOG2 pass)",
+        min=1,
+    )
+    people_margin_px: int = setting(
+        6,
+        "protected silhouettes are grown by this much before the model learns around them, "
+        "px (their outline flickers)",
+        min=0,
+    )
     edges_every_frames: int = setting(
         15,
         "the background image's gradients (for the blob stage's ghost test) are recomputed "
