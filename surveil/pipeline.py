@@ -35,6 +35,7 @@ from surveil.datatypes import (
     FrameSet,
     Limb,
     Phase,
+    TargetSnapshot,
 )
 from surveil.io.recording import Recording
 from surveil.recon.candidates import make_candidates
@@ -119,6 +120,8 @@ class Pipeline:
         # the previous frame set's heads and hands of people: the background model does not
         # learn the silhouettes that hold them
         self._people_m = np.zeros((0, 3))
+        self._person_seen: dict[int, tuple[int, int]] = {}  # person -> first, last t_ns
+        self._person_seen.clear()
 
     @classmethod
     def for_recording(cls, recording: Recording, cfg: PipelineConfig, rules: RuleSet) -> Pipeline:
@@ -137,6 +140,22 @@ class Pipeline:
         self._n_heads = 0
         self._n_framesets = 0
         self._people_m = np.zeros((0, 3))
+        self._person_seen.clear()
+
+    def _protected_people(self, t_ns: int, targets: Sequence[TargetSnapshot]) -> np.ndarray:
+        """(N, 3) the live heads and hands of persons tracked for at least
+        ``background.protect_after_s``: the background model learns around them. A person
+        unseen for that long is forgotten (their clock restarts)."""
+        after_ns = self.cfg.background.protect_after_s * 1e9
+        for person, (_, last) in list(self._person_seen.items()):
+            if t_ns - last > after_ns:
+                del self._person_seen[person]
+        live = [t for t in targets if t.person > 0 and t.phase is not Phase.LOST]
+        for t in live:
+            first, _ = self._person_seen.get(t.person, (t_ns, t_ns))
+            self._person_seen[t.person] = (first, t_ns)
+        old = [t.mean_m for t in live if t_ns - self._person_seen[t.person][0] >= after_ns]
+        return np.array(old).reshape(-1, 3)
 
     def _people_px(self, cam: str) -> np.ndarray:
         """(N, 2) where the previous frame set's people (heads and hands of labelled
@@ -198,9 +217,7 @@ class Pipeline:
         self._n_heads = sum(
             1 for t in track.targets if t.limb is Limb.HEAD and t.phase is not Phase.LOST
         )
-        self._people_m = np.array(
-            [t.mean_m for t in track.targets if t.person > 0 and t.phase is not Phase.LOST]
-        ).reshape(-1, 3)
+        self._people_m = self._protected_people(fs.t_ns, track.targets)
         carry = {}
         if self.cfg.carry_enabled and not learning:
             carry = self.carry.step(fs.t_ns, fs.images, observations, track.targets)

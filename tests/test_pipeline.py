@@ -66,3 +66,27 @@ def test_config_file_overrides_and_rejects_unknown_keys(tmp_path):
     bad.write_text("[candidates]\nsigma_gap = 0.02\n")
     with pytest.raises(ConfigError, match=r"bad.toml: candidates.sigma_gap is not a known key"):
         load_pipeline_config(bad)
+
+
+def test_the_background_learns_around_people_tracked_for_protect_after_s(small_recording):
+    # the background model is told about a person's head and hands only once the person has
+    # been tracked for protect_after_s (MOG2 needs far longer to absorb a still person);
+    # unlabelled and lost targets never count, and a person gone that long starts again
+    from surveil.datatypes import Limb, Phase, TargetSnapshot
+
+    rec = open_recording(small_recording)
+    pipe = Pipeline(PipelineConfig(), rec.rig, load_rules())
+    after = pipe.cfg.background.protect_after_s
+    s = 1_000_000_000
+
+    def snap(tid, person, limb, phase=Phase.NORMAL):
+        return TargetSnapshot(tid, person, limb, phase, np.array([1.0, 2.0, 1.0 + tid]))
+
+    first = [snap(1, 1, Limb.HEAD), snap(2, 0, Limb.UNKNOWN), snap(3, 1, Limb.LEFT_HAND)]
+    assert len(pipe._protected_people(0, first)) == 0
+    assert len(pipe._protected_people(int((after - 1) * s), first)) == 0
+    later = [*first, snap(4, 1, Limb.RIGHT_HAND, Phase.LOST), snap(5, 2, Limb.HEAD)]
+    got = pipe._protected_people(int(after * s), later)
+    assert sorted(got[:, 2]) == [2.0, 4.0]  # person 1's head and left hand only
+    gone = int((2 * after + 1) * s)
+    assert len(pipe._protected_people(gone, [snap(1, 1, Limb.HEAD)])) == 0

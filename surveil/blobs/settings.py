@@ -61,6 +61,13 @@ class BackgroundConfig:
         "not learnt into the background (without it, people who stay in one place fade "
         "from the foreground within a minute)",
     )
+    protect_after_s: float = setting(
+        20.0,
+        "a person's silhouettes are protected once the person has been tracked this long, s "
+        "(MOG2 at learning_rate needs about 47 s to absorb a still person; before this, the "
+        "model runs as MOG2 does by itself)",
+        min=0.0,
+    )
     people_update_every: int = setting(
         4,
         "while people are protected the model learns every this many frames, at that many "
