@@ -300,6 +300,8 @@ class BackgroundModel:
                 changed_small.view(np.uint8), size, interpolation=cv2.INTER_NEAREST
             ).view(bool),
             edges,
-            None if sil_small.centres_px is None else (sil_small.centres_px + 0.5) * (sx, sy) - 0.5,
+            None
+            if sil_small.centres_px is None
+            else (sil_small.centres_px + 0.5) * (sx, sy) - 0.5,
             None if sil_small.boxes_px is None else _scale_boxes(sil_small.boxes_px, sx, sy),
         )
