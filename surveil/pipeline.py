@@ -121,7 +121,6 @@ class Pipeline:
         # learn the silhouettes that hold them
         self._people_m = np.zeros((0, 3))
         self._person_seen: dict[int, tuple[int, int]] = {}  # person -> first, last t_ns
-        self._person_seen.clear()
 
     @classmethod
     def for_recording(cls, recording: Recording, cfg: PipelineConfig, rules: RuleSet) -> Pipeline:
