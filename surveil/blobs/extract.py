@@ -22,6 +22,10 @@ EDGE_FLOOR = 8.0
 OUTLINE_PX = 2  # a blob pixel this close to the outside of every silhouette is on its outline
 # a bare forearm with its hand is ~5 times longer than wide; a face with its neck ~2 times
 ARM_ASPECT = 3.0
+# shoulders are this fraction of a silhouette's height below its top (shoulder height is
+# 0.818 of a person's height, Drillis and Contini); a bare forearm's hand is its end
+# farther from there
+SHOULDER_DROP_REL = 0.18
 MIN_OUTLINE_PX = 5  # fewer outline pixels than this: no verdict, the blob is kept
 
 
@@ -217,7 +221,7 @@ def hand_ends(
     pixels_px: np.ndarray,
     blob_of: np.ndarray,
     centroids_px: np.ndarray,
-    body_centres_px: np.ndarray,
+    shoulders_px: np.ndarray,
     body_heights_px: np.ndarray,
     arm_length_rel: float,
     arm_max_length_rel: float,
@@ -231,15 +235,19 @@ def hand_ends(
     and ``arm_max_length_rel`` times its silhouette's height and exceeds ``ARM_ASPECT``
     times its width is such an arm; its point becomes the centre of mass of its
     pixels within ``hand_length_rel`` times that height of the tip farther from the
-    silhouette's centre (the hand hangs, reaches or rises away from the torso; the elbow
-    stays near it). All blobs at once: per-blob moments by ``np.bincount``.
+    silhouette's shoulder point (the hand hangs, reaches or rises away from the shoulder;
+    the elbow stays within an upper arm's length of it). The shoulder point, not the
+    silhouette's centre of mass: that lies at hip height, level with a hanging hand, so both
+    tips of a hanging forearm are about as far from it and the elbow often won (docs/blobs.md,
+    "Bare forearms"). All blobs at once: per-blob moments by ``np.bincount``.
 
     Parameters
     ----------
     pixels_px : (P, 2) float64 -- (u, v) of every blob pixel
     blob_of : (P,) int -- index of the blob each pixel belongs to, 0..B-1
     centroids_px : (B, 2) float64 -- their centres of mass
-    body_centres_px : (B, 2) float64 -- centre of mass of each blob's silhouette
+    shoulders_px : (B, 2) float64 -- shoulder point of each blob's silhouette: its centre
+        column, ``SHOULDER_DROP_REL`` times its height below its top row
     body_heights_px : (B,) float64 -- height of each blob's silhouette
 
     Returns
@@ -250,7 +258,7 @@ def hand_ends(
     >>> px = np.column_stack([xx.ravel(), yy.ravel()]).astype(float)
     >>> c = px.mean(axis=0, keepdims=True)
     >>> hand_ends(px, np.zeros(len(px), int), c, np.array([[1.5, -20.0]]), np.array([100.0]),
-    ...           0.17, 0.5, 0.1).round(2).tolist()  # body above: the hand is the lower end
+    ...           0.17, 0.5, 0.1).round(2).tolist()  # shoulder above: the hand is the lower end
     [[1.5, 34.0]]
     """
     n = len(centroids_px)
@@ -277,8 +285,8 @@ def hand_ends(
     )
     if not arm.any():
         return out
-    # point each arm's axis away from its silhouette's centre
-    away = np.einsum("bi,bi->b", centroids_px - body_centres_px, axis)
+    # point each arm's axis away from its silhouette's shoulder point
+    away = np.einsum("bi,bi->b", centroids_px - shoulders_px, axis)
     axis *= np.where(away < 0, -1.0, 1.0)[:, None]
     t = np.einsum("pi,pi->p", d, axis[blob_of])
     tip = np.full(n, -np.inf)
@@ -463,7 +471,12 @@ def _extract(
             np.column_stack([xs, ys]).astype(np.float64),
             remap[labels[ys, xs]],
             cents,
-            silhouettes.centres_px[sil_of - 1],
+            np.column_stack(
+                [
+                    silhouettes.centres_px[sil_of - 1, 0],
+                    top + SHOULDER_DROP_REL * (bottom - top + 1.0),
+                ]
+            ),
             bottom - top + 1.0,
             cfg.arm_length_rel,
             cfg.arm_max_length_rel,

@@ -142,6 +142,25 @@ def test_a_bare_forearm_stands_for_its_hand_end_and_a_face_for_its_centre():
     assert point == pytest.approx([72.0, 16.0])
 
 
+def test_a_hanging_forearm_level_with_the_hips_ends_in_its_lower_tip():
+    """A silhouette's centre of mass is at hip height, level with a hanging hand: a forearm
+    centred on that row is as far from it at both tips. The hand end is measured from the
+    shoulder point (SHOULDER_DROP_REL x 80 px below the top row 10), so the lower tip wins."""
+    sil = _one_person()
+    skin = np.zeros((H, W), bool)
+    skin[38:62, 70:75] = True  # centroid row 49.5, the silhouette's centre row 50
+    cfg = BlobConfig(
+        min_blob_area_px=1,
+        silhouette_dilate_px=0,
+        open_px=0,
+        max_blob_area_rel=0.0,
+        arm_length_rel=0.17,
+        hand_length_rel=0.1,
+    )
+    (point,) = extract_blobs(skin, sil, cfg).centroids_px
+    assert point == pytest.approx([72.0, 57.0])  # rows 53..61: within 8 px of the lower tip
+
+
 def test_dilation_takes_in_skin_just_outside_the_silhouette():
     sil = _one_person()
     skin = np.zeros((H, W), bool)
