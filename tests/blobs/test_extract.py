@@ -16,6 +16,16 @@ def _one_person():
     return silhouettes_from_mask(m, 10)
 
 
+# every skin pixel inside the silhouette is a blob, as it is; bare forearms on
+BARE_ARMS = BlobConfig(
+    min_blob_area_px=1,
+    silhouette_dilate_px=0,
+    open_px=0,
+    max_blob_area_rel=0.0,
+    arm_length_rel=0.17,
+)
+
+
 def test_keeps_ceil_lambda_3n_largest_and_drops_small():
     sil = _one_person()
     skin = np.zeros((H, W), bool)
@@ -115,13 +125,7 @@ def test_a_bare_forearm_stands_for_its_hand_end_and_a_face_for_its_centre():
     skin[50:74, 70:75] = True  # hanging arm beside the body: 24 x 5 px, 0.3 of the height
     skin[12:34, 40:50] = True  # face and neck: 22 x 10 px
     skin[50:60, 25:29] = True  # hand alone at the other side: 10 x 4 px
-    cfg = BlobConfig(
-        min_blob_area_px=1,
-        silhouette_dilate_px=0,
-        open_px=0,
-        max_blob_area_rel=0.0,
-        arm_length_rel=0.17,
-    )
+    cfg = BARE_ARMS
     tenth = dataclasses.replace(cfg, hand_length_rel=0.1)
     by_size = extract_blobs(skin, sil, tenth)
     face, arm, hand = by_size.centroids_px
@@ -149,14 +153,7 @@ def test_a_hanging_forearm_level_with_the_hips_ends_in_its_lower_tip():
     sil = _one_person()
     skin = np.zeros((H, W), bool)
     skin[38:62, 70:75] = True  # centroid row 49.5, the silhouette's centre row 50
-    cfg = BlobConfig(
-        min_blob_area_px=1,
-        silhouette_dilate_px=0,
-        open_px=0,
-        max_blob_area_rel=0.0,
-        arm_length_rel=0.17,
-        hand_length_rel=0.1,
-    )
+    cfg = dataclasses.replace(BARE_ARMS, hand_length_rel=0.1)
     (point,) = extract_blobs(skin, sil, cfg).centroids_px
     assert point == pytest.approx([72.0, 57.0])  # rows 53..61: within 8 px of the lower tip
 
