@@ -467,17 +467,16 @@ def _extract(
     bottom = np.asarray(silhouettes.bottom_v_px)[sil_of - 1]
     if cfg.arm_length_rel > 0 and silhouettes.centres_px is not None:
         ys, xs = np.nonzero(sel)
+        heights = bottom - top + 1.0
+        shoulders = np.column_stack(
+            [silhouettes.centres_px[sil_of - 1, 0], top + SHOULDER_DROP_REL * heights]
+        )
         cents = hand_ends(
             np.column_stack([xs, ys]).astype(np.float64),
             remap[labels[ys, xs]],
             cents,
-            np.column_stack(
-                [
-                    silhouettes.centres_px[sil_of - 1, 0],
-                    top + SHOULDER_DROP_REL * (bottom - top + 1.0),
-                ]
-            ),
-            bottom - top + 1.0,
+            shoulders,
+            heights,
             cfg.arm_length_rel,
             cfg.arm_max_length_rel,
             cfg.hand_length_rel,
