@@ -251,7 +251,9 @@ class Silhouettes:
         learning phase or when not asked for. Edges of the empty scene: the blob stage tells
         revealed background (an object taken away) from things in front of it with them.
     centres_px : (n, 2) float64 or None -- centre of mass (u, v) of each component; None when
-        not known. The blob stage tells a bare forearm's hand end from its elbow end with it.
+        not known. The blob stage places a silhouette's shoulder point on its column (and
+        ``SHOULDER_DROP_REL`` of the height below ``top_v_px``) to tell a bare forearm's
+        hand end from its elbow end.
     boxes_px : (n, 4) int32 or None -- x, y, width, height of a box holding each component
         (its bounding box, or one a little larger); None when not known (then read from
         ``labels``). Skin and blobs are computed inside these boxes only (:meth:`boxes`).
