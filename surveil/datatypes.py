@@ -241,7 +241,8 @@ class Silhouettes:
     labels : (H, W) int32 -- 0 background, s = 1..n for component s
     top_v_px, bottom_v_px : (n,) float64 -- first and last image row of each component
     dist_outside_px : (H, W) float32 -- distance of every pixel to the nearest silhouette
-        pixel, 0 inside a silhouette (for the silhouette prior p_b, paper 004 eq. 27)
+        pixel, 0 inside a silhouette (for the silhouette prior p_b, paper 004 eq. 27); in a
+        run clipped at ``surveil.pipeline.silhouette_distance_cap_px`` (min(distance, cap))
     changed : (H, W) bool or None -- pixels the background model found unlike the background
         (foreground or shadow) before the morphological clean-up; None when not known. The
         clean-up's closing fills gaps between limbs with background, which ``changed`` tells

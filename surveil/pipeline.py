@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import logging
+import math
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -72,6 +73,29 @@ def load_pipeline_config(path: Path | None) -> PipelineConfig:
     if path is None:
         return PipelineConfig()
     return from_table(PipelineConfig, read_toml(Path(path)), f"{path}: ")
+
+
+def silhouette_distance_cap_px(cfg: PipelineConfig) -> float | None:
+    """How far from the silhouettes a run needs exact distances (``dist_outside_px``), frame
+    pixels; None: everywhere.
+
+    The silhouette prior p_b reads them: one camera's term exp(-0.5 (d / sigma)^2) rejects a
+    candidate once it is below t = max(``term_threshold``, ``prior_threshold``) (p_b and
+    the prior's product are at most that term), from d = sigma sqrt(2 ln(1 / t)). The cap
+    is one sigma beyond that, and at least 4 sigma (the bilinear scaling from the model's
+    size reads neighbours a pixel away). The head body check compares distances with
+    ``body_tolerance_px``: at least twice that. Beyond the cap every value is moot, so a run
+    finds the same candidates and tracks as with exact distances.
+
+    >>> silhouette_distance_cap_px(PipelineConfig())
+    24.0
+    """
+    c = cfg.candidates
+    t = max(c.term_threshold, c.prior_threshold)
+    if t <= 0.0:
+        return None
+    sigmas = max(4.0, math.sqrt(2.0 * math.log(1.0 / t)) + 1.0) if t < 1.0 else 4.0
+    return max(sigmas * c.sigma_silhouette_px, 2.0 * cfg.tracking.labelling.body_tolerance_px)
 
 
 def config_as_dict(cfg: Any) -> Any:
@@ -176,6 +200,7 @@ class Pipeline:
                     self.cfg.background,
                     img.shape[:2],
                     learning_frames_after(self.cfg.background, self._n_framesets),
+                    silhouette_distance_cap_px(self.cfg),
                 )
             t0 = time.perf_counter()
             silhouettes = bg.step(

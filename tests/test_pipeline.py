@@ -90,3 +90,50 @@ def test_the_background_learns_around_people_tracked_for_protect_after_s(small_r
     assert sorted(got[:, 2]) == [2.0, 4.0]  # person 1's head and left hand only
     gone = int((2 * after + 1) * s)
     assert len(pipe._protected_people(gone, [snap(1, 1, Limb.HEAD)])) == 0
+
+
+def test_clipped_silhouette_distances_leave_candidates_and_tracks_unchanged(
+    small_recording, monkeypatch
+):
+    # the run clips dist_outside_px where p_b and the head body check no longer read it
+    # (silhouette_distance_cap_px): the same candidates and tracks as with exact distances
+    import surveil.pipeline as pipeline_module
+
+    rec = open_recording(small_recording)
+    clipped = Pipeline(PipelineConfig(), rec.rig, load_rules())
+    exact = Pipeline(PipelineConfig(), rec.rig, load_rules())
+    n_candidates = 0
+    for fs in rec.framesets():
+        a = clipped.step(fs)
+        with monkeypatch.context() as m:  # models made in this step measure exactly
+            m.setattr(pipeline_module, "silhouette_distance_cap_px", lambda cfg: None)
+            b = exact.step(fs)
+        np.testing.assert_array_equal(a.candidates.points_m, b.candidates.points_m)
+        np.testing.assert_array_equal(a.candidates.prior, b.candidates.prior)
+        assert [(t.target_id, t.label, t.phase) for t in a.track.targets] == [
+            (t.target_id, t.label, t.phase) for t in b.track.targets
+        ]
+        n_candidates += len(a.candidates.points_m)
+    assert n_candidates > 0
+    cap = pipeline_module.silhouette_distance_cap_px(PipelineConfig())
+    assert all(bg.distance_cap_px == cap for bg in clipped.backgrounds.values())
+    assert all(bg.distance_cap_px is None for bg in exact.backgrounds.values())
+    clipped_dist = next(iter(a.observations.values())).silhouettes.dist_outside_px
+    assert clipped_dist.max() <= cap + 1e-4
+
+
+def test_the_distance_cap_follows_the_settings_that_read_the_distances():
+    from surveil.pipeline import silhouette_distance_cap_px
+
+    cfg = PipelineConfig()
+    wider = PipelineConfig(candidates=cfg.candidates.__class__(sigma_silhouette_px=12.0))
+    assert silhouette_distance_cap_px(wider) == 2 * silhouette_distance_cap_px(cfg)
+    lax = PipelineConfig(
+        candidates=cfg.candidates.__class__(term_threshold=1e-6, prior_threshold=1e-6)
+    )
+    # p_b rejects only from sigma sqrt(2 ln 1e6) = 5.3 sigma: the cap moves out with it
+    assert silhouette_distance_cap_px(lax) > 6 * cfg.candidates.sigma_silhouette_px
+    never = PipelineConfig(
+        candidates=cfg.candidates.__class__(term_threshold=0, prior_threshold=0)
+    )
+    assert silhouette_distance_cap_px(never) is None

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import math
 
 import cv2
 import numpy as np
@@ -43,7 +44,9 @@ def _ellipse(diameter_px: int) -> np.ndarray | None:
     return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (diameter_px, diameter_px))
 
 
-def silhouettes_from_mask(foreground: np.ndarray, min_area_px: int) -> Silhouettes:
+def silhouettes_from_mask(
+    foreground: np.ndarray, min_area_px: int, max_distance_px: float | None = None
+) -> Silhouettes:
     """Person silhouettes from a cleaned foreground mask.
 
     Parameters
@@ -51,18 +54,25 @@ def silhouettes_from_mask(foreground: np.ndarray, min_area_px: int) -> Silhouett
     foreground : (H, W) bool or uint8 (non-zero = foreground)
     min_area_px : int
         Components smaller than this are dropped.
+    max_distance_px : float, optional
+        Clip ``dist_outside_px`` at this distance. The distance transform then runs only on
+        the box around the silhouettes widened by it (people cover a small part of a frame:
+        about half the cost). None: exact everywhere.
 
     Returns
     -------
     Silhouettes
         Labels 1..n in the order OpenCV found them (raster order of their first pixel);
-        ``dist_outside_px`` is the Euclidean distance to the nearest silhouette pixel, or the
-        image diagonal everywhere when there is no silhouette.
+        ``dist_outside_px`` is the Euclidean distance to the nearest silhouette pixel
+        (clipped at ``max_distance_px``), or the image diagonal (or ``max_distance_px``)
+        everywhere when there is no silhouette.
 
     >>> m = np.zeros((20, 20), bool); m[5:15, 8:12] = True
     >>> s = silhouettes_from_mask(m, 10)
     >>> s.n, s.top_v_px.tolist(), s.bottom_v_px.tolist(), float(s.dist_outside_px[10, 2])
     (1, [5.0], [14.0], 6.0)
+    >>> float(silhouettes_from_mask(m, 10, max_distance_px=4.0).dist_outside_px[10, 2])
+    4.0
     """
     require_shape("foreground", foreground, (None, None), np.generic)
     fg = foreground.astype(np.uint8, copy=False)
@@ -75,11 +85,14 @@ def silhouettes_from_mask(foreground: np.ndarray, min_area_px: int) -> Silhouett
     labels = relabel[labels]
     top = stats[keep, cv2.CC_STAT_TOP].astype(np.float64)
     bottom = top + stats[keep, cv2.CC_STAT_HEIGHT] - 1
-    if len(keep):
+    if not len(keep):
+        far = np.hypot(h, w) if max_distance_px is None else max_distance_px
+        dist = np.full((h, w), far, np.float32)
+    elif max_distance_px is None:
         outside = (labels == 0).astype(np.uint8)
         dist = cv2.distanceTransform(outside, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
     else:
-        dist = np.full((h, w), np.hypot(h, w), np.float32)
+        dist = _clipped_distance_outside(labels, stats[keep, :4], max_distance_px)
     return Silhouettes(
         labels,
         top,
@@ -88,6 +101,26 @@ def silhouettes_from_mask(foreground: np.ndarray, min_area_px: int) -> Silhouett
         centres_px=centres[keep].astype(np.float64),
         boxes_px=stats[keep, :4].astype(np.int32),
     )
+
+
+def _clipped_distance_outside(
+    labels: np.ndarray, boxes_px: np.ndarray, max_distance_px: float
+) -> np.ndarray:
+    """(H, W) float32 min(distance to the nearest non-zero pixel of ``labels``,
+    ``max_distance_px``), with the transform run only on the box around ``boxes_px`` (x, y,
+    w, h; every non-zero pixel inside) widened by the clip distance: beyond it every pixel
+    is farther than that."""
+    h, w = labels.shape
+    reach = math.ceil(max_distance_px) + 1
+    x0 = max(int(boxes_px[:, 0].min()) - reach, 0)
+    y0 = max(int(boxes_px[:, 1].min()) - reach, 0)
+    x1 = min(int((boxes_px[:, 0] + boxes_px[:, 2]).max()) + reach, w)
+    y1 = min(int((boxes_px[:, 1] + boxes_px[:, 3]).max()) + reach, h)
+    dist = np.full((h, w), max_distance_px, np.float32)
+    outside = (labels[y0:y1, x0:x1] == 0).view(np.uint8)
+    near = cv2.distanceTransform(outside, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+    np.minimum(near, np.float32(max_distance_px), out=dist[y0:y1, x0:x1])
+    return dist
 
 
 def _scale_boxes(boxes_px: np.ndarray, sx: float, sy: float) -> np.ndarray:
@@ -129,6 +162,9 @@ class BackgroundModel:
     shape : (H, W) of the frames this camera delivers.
     learning_frames : length of the learning phase (default ``cfg.learning_frames``; a camera
         that starts late: :func:`learning_frames_after`)
+    distance_cap_px : clip ``Silhouettes.dist_outside_px`` at this many frame pixels (about
+        half the cost of the distance transform; the pipeline passes what its consumers
+        read, :func:`surveil.pipeline.silhouette_distance_cap_px`); None: exact everywhere
 
     The first ``learning_frames`` frames are learnt at ``cfg.learning_rate_initial``
     (default -1: MOG2's automatic 1/n, i.e. a running mean of everything seen so far), later
@@ -137,11 +173,18 @@ class BackgroundModel:
     """
 
     def __init__(
-        self, cfg: BackgroundConfig, shape: tuple[int, int], learning_frames: int | None = None
+        self,
+        cfg: BackgroundConfig,
+        shape: tuple[int, int],
+        learning_frames: int | None = None,
+        distance_cap_px: float | None = None,
     ) -> None:
         if len(shape) != 2 or min(shape) <= 0:
             raise ValueError(f"shape must be (H, W) with positive sizes, got {shape}")
+        if distance_cap_px is not None and not distance_cap_px > 0:
+            raise ValueError(f"distance_cap_px must be positive or None, got {distance_cap_px}")
         self.cfg = cfg
+        self.distance_cap_px = distance_cap_px
         self.learning_frames = cfg.learning_frames if learning_frames is None else learning_frames
         self.shape = (int(shape[0]), int(shape[1]))
         scale = cfg.model_scale
@@ -274,7 +317,7 @@ class BackgroundModel:
         if self._close is not None:
             fg = cv2.morphologyEx(fg, cv2.MORPH_CLOSE, self._close)
         if self._small_size is None:
-            full = silhouettes_from_mask(fg, self.cfg.min_person_area_px)
+            full = silhouettes_from_mask(fg, self.cfg.min_person_area_px, self.distance_cap_px)
             if protect:
                 self._learn_around(small, full.labels, np.asarray(people_px, np.float64))
             return dataclasses.replace(full, changed=changed_small, background_edges=edges)
@@ -282,18 +325,23 @@ class BackgroundModel:
         # size), then scaled back to frame pixels
         sx = self.shape[1] / self._small_size[0]
         sy = self.shape[0] / self._small_size[1]
-        sil_small = silhouettes_from_mask(fg, round(self.cfg.min_person_area_px / (sx * sy)))
+        dist_scale = 0.5 * (sx + sy)
+        cap = None if self.distance_cap_px is None else self.distance_cap_px / dist_scale
+        sil_small = silhouettes_from_mask(
+            fg, round(self.cfg.min_person_area_px / (sx * sy)), max_distance_px=cap
+        )
         if protect:
             # pixel centres: u_small = (u + 0.5) / sx - 0.5
             at = (np.asarray(people_px, np.float64) + 0.5) / (sx, sy) - 0.5
             self._learn_around(small, sil_small.labels, at)
         size = self.shape[::-1]
+        dist = cv2.resize(sil_small.dist_outside_px, size, interpolation=cv2.INTER_LINEAR)
+        dist *= np.float32(dist_scale)
         return Silhouettes(
             cv2.resize(sil_small.labels, size, interpolation=cv2.INTER_NEAREST),
             sil_small.top_v_px * sy,
             (sil_small.bottom_v_px + 1.0) * sy - 1.0,
-            cv2.resize(sil_small.dist_outside_px, size, interpolation=cv2.INTER_LINEAR)
-            * np.float32(0.5 * (sx + sy)),
+            dist,
             None
             if changed_small is None
             else cv2.resize(

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from surveil.blobs import BackgroundConfig, BackgroundModel
-from surveil.blobs.background import learning_frames_after
+from surveil.blobs.background import learning_frames_after, silhouettes_from_mask
 
 H, W = 120, 160
 
@@ -226,3 +226,36 @@ def test_wrong_frame_shape_names_argument():
     model = BackgroundModel(BackgroundConfig(), (H, W))
     with pytest.raises(ValueError, match="bgr"):
         model.step(np.zeros((H + 1, W, 3), np.uint8))
+
+
+def test_clipped_distances_are_the_exact_ones_up_to_the_clip(rng):
+    # the distance transform runs only near the silhouettes; beyond the clip every pixel is
+    # farther than it, so min(exact, clip) is what comes out everywhere
+    mask = np.zeros((H, W), bool)
+    mask[20:70, 30:45] = True
+    mask[60:110, 100:120] = True
+    exact = silhouettes_from_mask(mask, 10).dist_outside_px
+    clipped = silhouettes_from_mask(mask, 10, max_distance_px=9.5).dist_outside_px
+    np.testing.assert_allclose(clipped, np.minimum(exact, 9.5), atol=1e-5)
+    assert (exact > 30).any()  # the clip matters somewhere
+    empty = silhouettes_from_mask(np.zeros((H, W), bool), 10, max_distance_px=9.5)
+    assert (empty.dist_outside_px == 9.5).all()
+
+
+def test_a_distance_cap_changes_no_distance_below_it(rng):
+    cfg = BackgroundConfig(learning_frames=20, min_person_area_px=100)
+    exact, capped = BackgroundModel(cfg, (H, W)), BackgroundModel(cfg, (H, W), distance_cap_px=12)
+    _, frame = _scene(rng)
+    for _ in range(30):
+        img = frame()
+        exact.step(img)
+        capped.step(img)
+    img = frame()
+    img[30:90, 40:60] = (20, 200, 40)
+    a, b = exact.step(img), capped.step(img)
+    assert a.n == b.n == 1 and (a.labels == b.labels).all()
+    assert b.dist_outside_px.max() <= 12 + 1e-5
+    near = a.dist_outside_px < 10  # the model's half-size pixels: one of slack for the scaling
+    np.testing.assert_allclose(b.dist_outside_px[near], a.dist_outside_px[near], atol=1e-4)
+    with pytest.raises(ValueError, match="distance_cap_px"):
+        BackgroundModel(cfg, (H, W), distance_cap_px=0)
