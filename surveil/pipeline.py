@@ -94,7 +94,7 @@ def silhouette_distance_cap_px(cfg: PipelineConfig) -> float | None:
     t = max(c.term_threshold, c.prior_threshold)
     if t <= 0.0:
         return None
-    sigmas = max(4.0, math.sqrt(2.0 * math.log(1.0 / t)) + 1.0) if t < 1.0 else 4.0
+    sigmas = max(4.0, math.sqrt(2.0 * math.log(1.0 / t)) + 1.0)
     return max(sigmas * c.sigma_silhouette_px, 2.0 * cfg.tracking.labelling.body_tolerance_px)
 
 

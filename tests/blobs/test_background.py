@@ -228,7 +228,7 @@ def test_wrong_frame_shape_names_argument():
         model.step(np.zeros((H + 1, W, 3), np.uint8))
 
 
-def test_clipped_distances_are_the_exact_ones_up_to_the_clip(rng):
+def test_clipped_distances_are_the_exact_ones_up_to_the_clip():
     # the distance transform runs only near the silhouettes; beyond the clip every pixel is
     # farther than it, so min(exact, clip) is what comes out everywhere
     mask = np.zeros((H, W), bool)
