@@ -124,16 +124,13 @@ def test_clipped_silhouette_distances_leave_candidates_and_tracks_unchanged(
 
 def test_the_distance_cap_follows_the_settings_that_read_the_distances():
     from surveil.pipeline import silhouette_distance_cap_px
+    from surveil.recon.settings import CandidateConfig
 
     cfg = PipelineConfig()
-    wider = PipelineConfig(candidates=cfg.candidates.__class__(sigma_silhouette_px=12.0))
+    wider = PipelineConfig(candidates=CandidateConfig(sigma_silhouette_px=12.0))
     assert silhouette_distance_cap_px(wider) == 2 * silhouette_distance_cap_px(cfg)
-    lax = PipelineConfig(
-        candidates=cfg.candidates.__class__(term_threshold=1e-6, prior_threshold=1e-6)
-    )
+    lax = PipelineConfig(candidates=CandidateConfig(term_threshold=1e-6, prior_threshold=1e-6))
     # p_b rejects only from sigma sqrt(2 ln 1e6) = 5.3 sigma: the cap moves out with it
     assert silhouette_distance_cap_px(lax) > 6 * cfg.candidates.sigma_silhouette_px
-    never = PipelineConfig(
-        candidates=cfg.candidates.__class__(term_threshold=0, prior_threshold=0)
-    )
+    never = PipelineConfig(candidates=CandidateConfig(term_threshold=0, prior_threshold=0))
     assert silhouette_distance_cap_px(never) is None
