@@ -226,14 +226,18 @@ def hand_ends(
     arm_length_rel: float,
     arm_max_length_rel: float,
     hand_length_rel: float,
+    arm_min_width_rel: float = 0.0,
 ) -> np.ndarray:
     """Each blob's point: its centre of mass, or its hand end when it is a bare forearm.
 
     With short sleeves the forearm is skin too, and its blob's centre of mass lies halfway to
     the elbow, ~15 cm from the hand. A blob whose extent along its principal axis (sqrt(12)
     times the standard deviation, exact for a uniform bar) lies between ``arm_length_rel``
-    and ``arm_max_length_rel`` times its silhouette's height and exceeds ``ARM_ASPECT``
-    times its width is such an arm; its point becomes the centre of mass of its
+    and ``arm_max_length_rel`` times its silhouette's height, exceeds ``ARM_ASPECT``
+    times its width, is at least ``arm_min_width_rel`` times that height wide and has at
+    least the pixels of an ``arm_length_rel`` by ``arm_min_width_rel`` bar is such an arm
+    (the width and pixel bounds turn away skin-coloured fringes, such as a wooden table's
+    edge inside a silhouette, which are as long but thin and sparse); its point becomes the centre of mass of its
     pixels within ``hand_length_rel`` times that height of the tip farther from the
     silhouette's shoulder point (the hand hangs, reaches or rises away from the shoulder;
     the elbow stays within an upper arm's length of it). The shoulder point, not the
@@ -278,10 +282,13 @@ def hand_ends(
     angle = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)
     axis = np.column_stack([np.cos(angle), np.sin(angle)])
     length = np.sqrt(12.0 * major)
+    min_width = arm_min_width_rel * body_heights_px
     arm = (
         (length > arm_length_rel * body_heights_px)
         & (length < arm_max_length_rel * body_heights_px)
         & (major > ARM_ASPECT**2 * minor)
+        & (12.0 * minor >= min_width**2)
+        & (count >= arm_length_rel * body_heights_px * min_width)
     )
     if not arm.any():
         return out
@@ -480,6 +487,7 @@ def _extract(
             cfg.arm_length_rel,
             cfg.arm_max_length_rel,
             cfg.hand_length_rel,
+            cfg.arm_min_width_rel,
         )
     rel_v = (cents[:, 1] - top) / np.maximum(bottom - top, 1.0)
     out_labels = np.zeros(n_all, np.int32)

@@ -171,6 +171,14 @@ class BlobConfig:
         "or several limbs joined, whose ends are not hands)",
         min=0.0,
     )
+    arm_min_width_rel: float = setting(
+        0.035,
+        "... and at least this wide times its silhouette's height, and at least as many "
+        "pixels as a bar of arm_length_rel by this (a wrist is ~0.035 of a person's height; "
+        "skin-coloured fringes along a table's edge inside a silhouette are thinner and "
+        "sparser)",
+        min=0.0,
+    )
     hand_length_rel: float = setting(
         0.11,
         "... the hand end: the centre of mass of the blob's last this much (times the "

@@ -158,6 +158,35 @@ def test_a_hanging_forearm_level_with_the_hips_ends_in_its_lower_tip():
     assert point == pytest.approx([72.0, 57.0])  # rows 53..61: within 8 px of the lower tip
 
 
+def test_a_fringe_as_long_as_a_forearm_but_thin_or_sparse_keeps_its_centre():
+    """A wooden table's edge inside a silhouette is a skin-coloured strip as long as a
+    forearm: thinner than a wrist (arm_min_width_rel x 81 px = 2.8 px), or, where the edge is
+    slanted and noisy, with fewer pixels than a bar of arm_length_rel x 81 by that width
+    (39). Its point stays
+    its centre of mass; a forearm 4 px wide still moves to its hand end."""
+    sil = _one_person()
+    cfg = dataclasses.replace(BARE_ARMS, hand_length_rel=0.1)
+    thin = np.zeros((H, W), bool)
+    thin[50:74, 70:72] = True  # 24 x 2 px
+    (point,) = extract_blobs(thin, sil, cfg).centroids_px
+    assert point == pytest.approx([70.5, 61.5])
+    sparse = np.zeros((H, W), bool)
+    rows = np.arange(50, 74)
+    sparse[rows, 70 + np.abs((rows % 6) - 3)] = True  # a zigzag 24 px long, 4 px wide: 24 px
+    (point,) = extract_blobs(sparse, sil, cfg).centroids_px
+    assert point == pytest.approx(np.argwhere(sparse)[:, ::-1].mean(axis=0))
+    # wide enough (3.3 px): only the pixel count turned it away; a lower bound (22 px) lets it
+    lower = dataclasses.replace(cfg, arm_min_width_rel=0.02)
+    assert extract_blobs(sparse, sil, lower).centroids_px[0][1] == pytest.approx(69.0)
+    wrist_wide = np.zeros((H, W), bool)
+    wrist_wide[50:74, 70:74] = True  # 24 x 4 px
+    (point,) = extract_blobs(wrist_wide, sil, cfg).centroids_px
+    assert point == pytest.approx([71.5, 69.0])
+    assert extract_blobs(
+        thin, sil, dataclasses.replace(cfg, arm_min_width_rel=0.0)
+    ).centroids_px[0] == pytest.approx([70.5, 69.0])
+
+
 def test_dilation_takes_in_skin_just_outside_the_silhouette():
     sil = _one_person()
     skin = np.zeros((H, W), bool)
