@@ -237,10 +237,10 @@ def hand_ends(
     times its width, is at least ``arm_min_width_rel`` times that height wide and has at
     least the pixels of an ``arm_length_rel`` by ``arm_min_width_rel`` bar is such an arm
     (the width and pixel bounds turn away skin-coloured fringes, such as a wooden table's
-    edge inside a silhouette, which are as long but thin and sparse); its point becomes the centre of mass of its
-    pixels within ``hand_length_rel`` times that height of the tip farther from the
-    silhouette's shoulder point (the hand hangs, reaches or rises away from the shoulder;
-    the elbow stays within an upper arm's length of it). The shoulder point, not the
+    edge inside a silhouette, which are as long but thin and sparse); its point becomes the
+    centre of mass of its pixels within ``hand_length_rel`` times that height of the tip
+    farther from the silhouette's shoulder point (the hand hangs, reaches or rises away from
+    the shoulder; the elbow stays within an upper arm's length of it). The shoulder point, not the
     silhouette's centre of mass: that lies at hip height, level with a hanging hand, so both
     tips of a hanging forearm are about as far from it and the elbow often won (docs/blobs.md,
     "Bare forearms"). All blobs at once: per-blob moments by ``np.bincount``.
@@ -253,6 +253,8 @@ def hand_ends(
     shoulders_px : (B, 2) float64 -- shoulder point of each blob's silhouette: its centre
         column, ``SHOULDER_DROP_REL`` times its height below its top row
     body_heights_px : (B,) float64 -- height of each blob's silhouette
+    arm_length_rel, arm_max_length_rel, arm_min_width_rel, hand_length_rel : float --
+        ``BlobConfig``'s bounds, fractions of the silhouette's height
 
     Returns
     -------
