@@ -182,9 +182,8 @@ def test_a_fringe_as_long_as_a_forearm_but_thin_or_sparse_keeps_its_centre():
     wrist_wide[50:74, 70:74] = True  # 24 x 4 px
     (point,) = extract_blobs(wrist_wide, sil, cfg).centroids_px
     assert point == pytest.approx([71.5, 69.0])
-    assert extract_blobs(
-        thin, sil, dataclasses.replace(cfg, arm_min_width_rel=0.0)
-    ).centroids_px[0] == pytest.approx([70.5, 69.0])
+    no_width_bound = dataclasses.replace(cfg, arm_min_width_rel=0.0)
+    assert extract_blobs(thin, sil, no_width_bound).centroids_px[0] == pytest.approx([70.5, 69.0])
 
 
 def test_dilation_takes_in_skin_just_outside_the_silhouette():
