@@ -225,8 +225,8 @@ def hand_ends(
     body_heights_px: np.ndarray,
     arm_length_rel: float,
     arm_max_length_rel: float,
+    arm_min_width_rel: float,
     hand_length_rel: float,
-    arm_min_width_rel: float = 0.0,
 ) -> np.ndarray:
     """Each blob's point: its centre of mass, or its hand end when it is a bare forearm.
 
@@ -263,8 +263,9 @@ def hand_ends(
     >>> yy, xx = np.mgrid[0:40, 0:4]  # a vertical bar 40 px long, 4 px wide
     >>> px = np.column_stack([xx.ravel(), yy.ravel()]).astype(float)
     >>> c = px.mean(axis=0, keepdims=True)
-    >>> hand_ends(px, np.zeros(len(px), int), c, np.array([[1.5, -20.0]]), np.array([100.0]),
-    ...           0.17, 0.5, 0.1).round(2).tolist()  # shoulder above: the hand is the lower end
+    >>> shoulder = np.array([[1.5, -20.0]])  # above the bar: the hand is its lower end
+    >>> hand_ends(px, np.zeros(len(px), int), c, shoulder, np.array([100.0]),
+    ...           0.17, 0.5, 0.035, 0.1).round(2).tolist()
     [[1.5, 34.0]]
     """
     n = len(centroids_px)
@@ -488,8 +489,8 @@ def _extract(
             heights,
             cfg.arm_length_rel,
             cfg.arm_max_length_rel,
-            cfg.hand_length_rel,
             cfg.arm_min_width_rel,
+            cfg.hand_length_rel,
         )
     rel_v = (cents[:, 1] - top) / np.maximum(bottom - top, 1.0)
     out_labels = np.zeros(n_all, np.int32)

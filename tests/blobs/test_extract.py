@@ -162,8 +162,8 @@ def test_a_fringe_as_long_as_a_forearm_but_thin_or_sparse_keeps_its_centre():
     """A wooden table's edge inside a silhouette is a skin-coloured strip as long as a
     forearm: thinner than a wrist (arm_min_width_rel x 81 px = 2.8 px), or, where the edge is
     slanted and noisy, with fewer pixels than a bar of arm_length_rel x 81 by that width
-    (39). Its point stays
-    its centre of mass; a forearm 4 px wide still moves to its hand end."""
+    (39). Its point stays its centre of mass; a forearm 4 px wide still moves to its hand
+    end."""
     sil = _one_person()
     cfg = dataclasses.replace(BARE_ARMS, hand_length_rel=0.1)
     thin = np.zeros((H, W), bool)
