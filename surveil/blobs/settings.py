@@ -183,7 +183,7 @@ class BlobConfig:
         0.11,
         "... the hand end: the centre of mass of the blob's last this much (times the "
         "silhouette's height) along its length, at the end farther from the silhouette's "
-        "centre (a hand is ~0.11 of a person's height)",
+        "shoulder point (a hand is ~0.11 of a person's height)",
         min=0.0,
     )
 
