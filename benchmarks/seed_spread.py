@@ -13,7 +13,10 @@ per seed for the eight scenes on one core) and prints:
 - per seed: events recognised, predicted, false (predicted - recognised), F1;
 - the mean and standard deviation of those over the seeds;
 - per scenario and activity: recognised and false summed over the seeds, out of
-  true x seeds.
+  true x seeds;
+- per scenario, the tracking figures of issue 4 averaged over the seeds (recall, mean hand
+  error, false targets per frame, left/right accuracy, identity switches per minute): one
+  seed's switches move by a whole switch (4 per minute in a 15 s scene) on a coin flip.
 """
 
 from __future__ import annotations
@@ -23,6 +26,7 @@ import statistics
 import sys
 from pathlib import Path
 
+import numpy as np
 from pipeline_bench import ROOT, bench
 
 
@@ -63,11 +67,24 @@ def main(argv: list[str] | None = None) -> int:
     names = args.names or sorted(p.stem for p in (ROOT / "recordings").glob("*.toml"))
     per_seed: list[tuple[int, int, int, int]] = []  # seed, true, predicted, matched
     by_activity: dict[tuple[str, str], list[int]] = {}  # true, predicted, matched summed
+    tracking: dict[str, list[tuple[float, ...]]] = {}  # per scenario, one row per seed
     for seed in args.seeds:
         n_true = n_pred = n_matched = 0
         for name in names:
             report, _, _ = bench(name, args.out, seed, args.config)
-            e = report.events
+            e, t = report.events, report.targets
+            tracking.setdefault(name, []).append(
+                tuple(
+                    np.nan if v is None else v
+                    for v in (
+                        t.recall,
+                        t.hand_error_mm_mean,
+                        t.false_targets_per_frame,
+                        t.left_right_accuracy,
+                        t.id_switches_per_min,
+                    )
+                )
+            )
             n_true += e.n_true
             n_pred += e.n_pred
             n_matched += e.n_matched
@@ -114,6 +131,15 @@ def main(argv: list[str] | None = None) -> int:
     print("|---|---|---|---|")
     for (name, activity), (n_true, n_pred, matched) in sorted(by_activity.items()):
         print(f"| {name} | {activity} | {matched} / {n_true} | {n_pred - matched} |")
+    print()
+    print(
+        "| scenario, mean over seeds | recall | hand mm | false / frame | left/right "
+        "| ID switches / min |"
+    )
+    print("|---|---|---|---|---|---|")
+    for name, rows in tracking.items():
+        r, hand, false, lr, sw = np.nanmean(np.array(rows, dtype=float), axis=0)
+        print(f"| {name} | {r:.3f} | {hand:.0f} | {false:.2f} | {lr:.3f} | {sw:.1f} |")
     return 0
 
 

@@ -410,6 +410,16 @@ class MultiTargetTracker:
                 drifted.add(min(bad, key=lambda tr: (tr.since_miss, -tr.id)).id)
             else:
                 pairs[a.id], pairs[b.id] = b.id, a.id
+        joined = [tr.mean_m for tr in self._tracks.values() if tr.phase is Phase.COMBINED]
+        if joined:
+            # the same for a stray inside a combined pair: it would claim the candidate of
+            # the target that leaves the pair, which then never finds its second mode
+            near = np.linalg.norm(pos[:, None] - np.array(joined)[None], axis=2).min(axis=1)
+            for tr, dist in zip(cand, near, strict=True):
+                if dist < lc.combine_distance_m and tr.id not in pairs:
+                    if not tr.ever_labelled and tr.person == 0:
+                        log.debug("t%d is a duplicate inside a combined pair", tr.id)
+                        drifted.add(tr.id)
         return pairs, drifted
 
     def _came(self, a: _Track, b: _Track) -> bool:

@@ -859,3 +859,32 @@ def test_a_hand_that_wins_a_slot_by_ownership_is_sided_afresh(rig, redecide):
         assert sides == ("p1/left_hand", "p1/right_hand")
     else:
         assert sides == ("p1/right_hand", "p1/left_hand")
+
+
+def test_a_ghost_tracker_that_slides_into_joined_hands_is_lost_and_the_pair_parts(rig, rng):
+    """A ghost candidate 25 cm in front of where the hands will meet starts a tracker that
+    never joins the person; while the hands are joined it slides into them. Inside the
+    pair it would claim the candidate of a hand that leaves, and the pair would keep both
+    labels on the other hand: as a duplicate of the pair's targets it is lost, and the
+    pair parts with each label on its own hand."""
+    frames, sides, p = clap_frames(cross=False)
+    meet = frames[35 + 8][1]
+    ghost = meet + 0.25 * p["fwd"]
+    for i in range(20, 43):
+        frames[i] = [*frames[i], ghost]
+    for k, i in enumerate(range(43, 47)):  # into the joined hands over four frames
+        u = (k + 1) / 4
+        frames[i] = [frames[i][0], *merged([frames[i][1], ghost * (1 - u) + meet * u])]
+    out = run(MultiTargetTracker(LONE, rig, seed=12), frames, rng)
+    ids = {s.label: s.target_id for s in out[34].targets}
+    starts = [t.target_id for f in out for t in f.transitions if t.old is Phase.UNINITIALISED]
+    people = {ids["p1/head"], ids["p1/left_hand"], ids["p1/right_hand"]}
+    ghost_id = [t for t in starts if t not in people]
+    assert len(ghost_id) == 1
+    lost = {t.target_id for f in out for t in f.transitions if t.new is Phase.LOST}
+    assert ghost_id[0] in lost
+    splits = [t for f in out for t in f.transitions if t.old is Phase.COMBINED]
+    assert {t.target_id for t in splits} == {ids["p1/left_hand"], ids["p1/right_hand"]}
+    final = by_label(out[-1])
+    assert np.linalg.norm(final["p1/left_hand"] - sides[-1][0]) < 0.04
+    assert np.linalg.norm(final["p1/right_hand"] - sides[-1][1]) < 0.04
