@@ -116,6 +116,11 @@ class _Track:
     def labelled(self) -> bool:
         return self.person > 0 and self.limb is not Limb.UNKNOWN
 
+    @property
+    def stray(self) -> bool:
+        """It never joined a person: near a person's target it is a duplicate or a ghost."""
+        return not self.ever_labelled and self.person == 0
+
     def take_label_off(self) -> None:
         """Back to no person and no limb (the caller frees its person's slot)."""
         self.person, self.limb, self.attached_ns, self.astray_ns = 0, Limb.UNKNOWN, None, None
@@ -372,11 +377,13 @@ class MultiTargetTracker:
         """Pairs of unlabelled/normal trackers whose estimates are closer than the combine
         distance; closest first, each tracker in at most one pair (at most two targets join
         at once, paper 004 section 5). A tracker of a close pair that was unsupported in its
-        last ``drift_window_frames`` frame sets has drifted instead (returned apart)."""
+        last ``drift_window_frames`` frame sets has drifted instead (returned apart), and so
+        has a stray (:attr:`_Track.stray`) that meets a person's tracker or a combined pair."""
         lc = self.cfg.lifecycle
         cand = [tr for tr in self._tracks.values() if tr.phase in (Phase.UNLABELLED, Phase.NORMAL)]
+        drifted = self._strays_in_pairs(cand)
         if len(cand) < 2:
-            return {}, set()
+            return {}, drifted
         pos = np.array([tr.mean_m for tr in cand])
         d = np.linalg.norm(pos[:, None] - pos[None], axis=2)
         iu, ju = np.triu_indices(len(cand), 1)
@@ -393,14 +400,13 @@ class MultiTargetTracker:
             a, b = cand[iu[k]], cand[ju[k]]
             close[k] = any(self._came(x, y) for x, y in ((a, b), (b, a)) if x.misses > 0)
         pairs: dict[int, int] = {}
-        drifted: set[int] = set()
         for k in np.flatnonzero(close)[np.argsort(d[iu, ju][close], kind="stable")]:
             a, b = cand[iu[k]], cand[ju[k]]
             if a.id in pairs or b.id in pairs or a.id in drifted or b.id in drifted:
                 continue
             bad = [tr for tr in (a, b) if tr.since_miss < lc.drift_window_frames]
             met = hands[k] and any(self._came(x, y) for x, y in ((a, b), (b, a)) if x in bad)
-            stray = [tr for tr in (a, b) if not tr.ever_labelled and tr.person == 0]
+            stray = [tr for tr in (a, b) if tr.stray]
             if len(stray) == 1 and (a if stray[0] is b else b).person > 0:
                 # a tracker that never joined a person meets one that did: it is a duplicate
                 # of that target or a ghost beside it (mismatched blob pair), not a second
@@ -410,17 +416,23 @@ class MultiTargetTracker:
                 drifted.add(min(bad, key=lambda tr: (tr.since_miss, -tr.id)).id)
             else:
                 pairs[a.id], pairs[b.id] = b.id, a.id
-        joined = [tr.mean_m for tr in self._tracks.values() if tr.phase is Phase.COMBINED]
-        if joined:
-            # the same for a stray inside a combined pair: it would claim the candidate of
-            # the target that leaves the pair, which then never finds its second mode
-            near = np.linalg.norm(pos[:, None] - np.array(joined)[None], axis=2).min(axis=1)
-            for tr, dist in zip(cand, near, strict=True):
-                if dist < lc.combine_distance_m and tr.id not in pairs:
-                    if not tr.ever_labelled and tr.person == 0:
-                        log.debug("t%d is a duplicate inside a combined pair", tr.id)
-                        drifted.add(tr.id)
         return pairs, drifted
+
+    def _strays_in_pairs(self, cand: list[_Track]) -> set[int]:
+        """Strays among ``cand`` within the combine distance of a combined pair: duplicates
+        of its targets. Left inside the pair, a stray claims the candidate of the target
+        that leaves, and the pair never finds its second mode."""
+        joined = [tr.mean_m for tr in self._tracks.values() if tr.phase is Phase.COMBINED]
+        strays = [tr for tr in cand if tr.stray]
+        if not joined or not strays:
+            return set()
+        pos = np.array([tr.mean_m for tr in strays])
+        near = np.linalg.norm(pos[:, None] - np.array(joined)[None], axis=2).min(axis=1)
+        gate = self.cfg.lifecycle.combine_distance_m
+        out = {tr.id for tr, d in zip(strays, near, strict=True) if d < gate}
+        for tid in sorted(out):
+            log.debug("t%d is a duplicate inside a combined pair", tid)
+        return out
 
     def _came(self, a: _Track, b: _Track) -> bool:
         """Whether a was approaching b at ``merge_closing_mps`` or faster before its latest
