@@ -51,6 +51,9 @@ log = logging.getLogger(__name__)
 
 ACTIVE = (Phase.UNLABELLED, Phase.NORMAL, Phase.COMBINED)
 HISTORY_FRAMES = 30  # estimates kept per tracker (for the angle rule's "before" vector)
+# how long unexplained candidates are remembered (the parting test looks back to a pair's
+# joining; pairs held longer than this are not checked against ghosts seen as they joined)
+UNEXPLAINED_LOG_S = 10.0
 
 
 def _persisted(since_ns: int | None, t_ns: int, need_s: float) -> tuple[int, bool]:
@@ -99,6 +102,8 @@ class _Track:
     support_ema: float = 0.0  # smoothed likelihood level (a ghost's is lower: fewer views)
     contest_ns: int | None = None  # since when it out-supports a hand holding a slot
     partner: int | None = None
+    joined_ns: int | None = None  # when it entered its current combined state
+    joined_m: np.ndarray | None = None  # its estimate then
     body_fails: int = 0  # frame sets in which it failed the body check (a head candidate)
     before_vec_m: np.ndarray | None = None
     apart_frames: int = 0
@@ -141,6 +146,7 @@ class _Pending:
     position_m: np.ndarray
     count: int
     velocity_mps: np.ndarray
+    first_ns: int  # when its run of consecutive frame sets began
     # combined tracker id -> the seed's distance from it when first seen together
     pair_first_m: dict[int, float] = field(default_factory=dict)
 
@@ -188,6 +194,8 @@ class MultiTargetTracker:
         self._next_person = 1
         self._last_t_ns: int | None = None
         self._shares: dict[int, np.ndarray] = {}  # tracker id -> exclusion share per candidate
+        # (t_ns, (k, 3) unexplained candidates) of the last UNEXPLAINED_LOG_S seconds
+        self._unexplained_log: deque[tuple[int, np.ndarray]] = deque()
 
     # ------------------------------------------------------------------ public step
 
@@ -239,7 +247,7 @@ class MultiTargetTracker:
         self._filter(pts, prior, dt_s)
         pairs, drifted = self._combine_pairs()
         self._measure_separation(pts, prior, dt_s)
-        seeds = self._update_seeds(pts, prior, dt_s)
+        seeds = self._update_seeds(pts, prior, dt_s, t_ns)
         reacquired = self._reacquire(seeds, t_ns)
         merged = self._merge_lost(t_ns, reacquired, pairs, seeds)
         parted = self._split_on_seeds(seeds, set(reacquired.values()))
@@ -520,15 +528,19 @@ class MultiTargetTracker:
             ok &= d.min(axis=1) > self.cfg.lifecycle.explained_radius_m
         return np.flatnonzero(ok)
 
-    def _update_seeds(self, pts: np.ndarray, prior: np.ndarray, dt_s: float) -> list[_Pending]:
+    def _update_seeds(
+        self, pts: np.ndarray, prior: np.ndarray, dt_s: float, t_ns: int
+    ) -> list[_Pending]:
         """Strong candidates no active tracker explains, continued from the previous frame
         set's (within ``init_gate_m``): the seeds of new and re-acquired trackers.
 
         Non-maximum suppression (strongest first, ``explained_radius_m``) keeps one seed per
         target. Returns this frame set's seeds; those with ``count >= init_confirm_frames``
-        persisted long enough to be trusted (one-frame ghosts never are)."""
+        persisted long enough to be trusted (one-frame ghosts never are). The unexplained
+        candidates are also logged for :meth:`_there_as_pair_joined`."""
         lc = self.cfg.lifecycle
         free = self._unexplained(pts, prior, lc.init_prior_min)
+        self._log_unexplained(pts[free], t_ns)
         kept: list[int] = []
         for k in sorted(free.tolist(), key=lambda k: (-prior[k], k)):
             if all(np.linalg.norm(pts[k] - pts[j]) > lc.explained_radius_m for j in kept):
@@ -546,14 +558,47 @@ class MultiTargetTracker:
                 taken_prev.add(best)
                 prev = self._pending[best]
                 vel = (pts[k] - prev.position_m) / dt_s if dt_s > 0 else np.zeros(3)
-                seed = _Pending(pts[k].copy(), prev.count + 1, vel, dict(prev.pair_first_m))
+                seed = _Pending(
+                    pts[k].copy(), prev.count + 1, vel, prev.first_ns, dict(prev.pair_first_m)
+                )
             else:
-                seed = _Pending(pts[k].copy(), 1, np.zeros(3))
+                seed = _Pending(pts[k].copy(), 1, np.zeros(3), t_ns)
             for tr in combined:
                 seed.pair_first_m.setdefault(tr.id, float(np.linalg.norm(pts[k] - tr.mean_m)))
             seeds.append(seed)
         self._pending = seeds
         return seeds
+
+    def _log_unexplained(self, pts: np.ndarray, t_ns: int) -> None:
+        log_ = self._unexplained_log
+        log_.append((t_ns, pts.copy()))
+        while log_ and (t_ns - log_[0][0]) * 1e-9 > UNEXPLAINED_LOG_S:
+            log_.popleft()
+
+    def _there_as_pair_joined(self, pair: _Track, seed: _Pending) -> bool:
+        """True if the seed was there before, as the pair joined, and has since vanished
+        and come back: an unexplained candidate within ``init_gate_m`` of it, before its
+        present run of frame sets, so close in time to the joining that neither of the
+        pair's targets could have been there (at ``leave_speed_mps`` a hand needs (distance
+        - gate) / speed to get from where the pair joined to the seed). Such a seed is not
+        a target leaving the pair but something that stood beside it (a ghost from
+        skin-coloured clothes beside shaking hands). A seed whose present run began that
+        early is not judged: its own steady evidence says the joining was not of two
+        targets (a tracker that slid onto the other's hand while its own went home)."""
+        lc = self.cfg.lifecycle
+        if pair.joined_ns is None or pair.joined_m is None:
+            return False
+        seed_m = seed.position_m
+        travel_s = max(float(np.linalg.norm(seed_m - pair.joined_m)) - lc.init_gate_m, 0.0)
+        travel_s /= lc.leave_speed_mps
+        for t_ns, pts in self._unexplained_log:
+            if t_ns >= seed.first_ns:
+                break
+            if abs(t_ns - pair.joined_ns) * 1e-9 >= travel_s or not len(pts):
+                continue
+            if (np.linalg.norm(pts - seed_m, axis=1) <= lc.init_gate_m).any():
+                return True
+        return False
 
     def _split_on_seeds(self, seeds: list[_Pending], used: set[int]) -> set[int]:
         """Part combined pairs on confirmed seeds near them; returns the seeds used.
@@ -569,7 +614,8 @@ class MultiTargetTracker:
         (``_Pending.pair_first_m``): a hand parting at 2.5 m/s is 70 cm away by the time its
         seed is confirmed, and after a handshake the pair follows the other hand away in the
         opposite direction (demo: 54 cm when the seed appeared, 75 cm from where the pair
-        then was two frame sets later)."""
+        then was two frame sets later). A seed that was already there as the pair joined
+        (:meth:`_there_as_pair_joined`) is not one of its targets."""
         lc = self.cfg.lifecycle
         out: set[int] = set()
         parted: set[int] = set()
@@ -593,6 +639,8 @@ class MultiTargetTracker:
                 & (fit > 0)
                 & ((d0 <= lc.pair_seed_gate_m) | (fit > 1))
             )
+            for j in np.flatnonzero(ok):
+                ok[j] = not self._there_as_pair_joined(tr, seeds[free[j]])
             if not ok.any():
                 continue
             k = int(np.argmin(np.where(ok, d0, np.inf)))
@@ -1231,6 +1279,7 @@ class MultiTargetTracker:
             if new is Phase.COMBINED:
                 partner_id = pairs[tid]
                 tr.partner = partner_id
+                tr.joined_ns, tr.joined_m = t_ns, tr.mean_m.copy()
                 tr.before_vec_m = self._before_vector(tr, self._tracks[partner_id])
                 tr.apart_frames = 0
             elif old is Phase.COMBINED:
@@ -1239,6 +1288,7 @@ class MultiTargetTracker:
                     self._separate(tr, self._tracks[partner_id])
                     separated_done.update((tid, partner_id))
                 tr.partner = None
+                tr.joined_ns = tr.joined_m = None
                 tr.before_vec_m = None
                 tr.apart_frames = 0
                 tr.split_m = tr.split_vel_mps = None

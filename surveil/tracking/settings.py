@@ -132,6 +132,13 @@ class LifecycleConfig:
         "it instead of a new tracker starting there, m",
         min=0.0,
     )
+    leave_speed_mps: float = setting(
+        3.0,
+        "the fastest a target leaves a combined pair: a seed where an unexplained candidate "
+        "already was sooner before or after the pair joined than a hand this fast could get "
+        "there is not one of the pair's targets, m/s",
+        min=0.1,
+    )
     separate_frames: int = setting(
         2, "consecutive frame sets the modes must stay apart before separating", min=1
     )

@@ -636,6 +636,51 @@ def test_a_ghost_beside_shaking_hands_does_not_take_a_hand_away(rig, rng):
     _assert_right_hands_owned(out[-1], a, b)
 
 
+@pytest.mark.parametrize("leave_speed_mps", [3.0, 1e9])
+def test_a_ghost_that_stood_beside_the_hands_as_they_joined_does_not_part_them(
+    rig, rng, leave_speed_mps
+):
+    """Two people shake right hands for two seconds. From just before the hands meet a ghost
+    flickers 50 cm from them, on b's chest (skin-coloured clothes), and then stays. It was
+    there as the hands joined, sooner than either hand could have got there, so it is not a
+    hand leaving the pair: the pair stays combined until the hands part, and each hand keeps
+    its owner's label. Without the rule (an unbounded leave speed) the pair parts onto the
+    ghost while the hands are still joined."""
+    a, b = body((2.0, 2.0), 0.0), body((3.0, 2.0), 180.0)
+    meet = np.array([2.5, 2.0, 1.05])
+    ghost = np.array([2.9, 2.15, 1.3])
+    rest = lambda p: [p["head"], p["left_hand"]]  # noqa: E731
+    frames = [[*rest(a), a["right_hand"], *rest(b), b["right_hand"]] for _ in range(45)]
+    for u in np.linspace(0, 1, 9)[1:]:
+        ra = a["right_hand"] + u * (meet - a["right_hand"])
+        rb = b["right_hand"] + u * (meet - b["right_hand"])
+        frames.append([*rest(a), *rest(b), *merged([ra, rb])])
+    frames += [[*rest(a), *rest(b), meet] for _ in range(30)]
+    for u in np.linspace(0, 1, 7)[1:]:
+        frames.append(
+            [
+                *rest(a),
+                *rest(b),
+                meet + u * (a["right_hand"] - meet),
+                meet + u * (b["right_hand"] - meet),
+            ]
+        )
+    frames += [[*rest(a), a["right_hand"], *rest(b), b["right_hand"]] for _ in range(20)]
+    joined = (45 + 6, 45 + 8 + 30)  # the hands' candidates are one from here to there
+    for k in range(joined[0] - 2, len(frames)):
+        if k >= joined[0] + 10 or (k - joined[0]) % 2 == 0:
+            frames[k] = [*frames[k], ghost]
+    cfg = TrackingConfig(lifecycle=LifecycleConfig(leave_speed_mps=leave_speed_mps))
+    out = run(MultiTargetTracker(cfg, rig, seed=14), frames, rng)
+    splits = [i for i, f in enumerate(out) for t in f.transitions if t.old is Phase.COMBINED]
+    assert splits
+    if leave_speed_mps < 1e3:
+        assert min(splits) >= joined[1]
+        _assert_right_hands_owned(out[-1], a, b)
+    else:
+        assert min(splits) < joined[1]
+
+
 @pytest.mark.parametrize("revise_s", [0.5, 0.0])
 def test_a_hand_taken_for_the_wrong_person_is_relabelled(rig, rng, revise_s):
     """b's right hand shows before b's head does (b's head hidden), held out 85 cm from a's
