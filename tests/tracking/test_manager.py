@@ -581,6 +581,26 @@ def test_a_new_tracker_that_meets_a_persons_hand_is_lost_not_combined(rig, rng):
     assert {s.label: s.target_id for s in out[-1].targets}["p1/right_hand"] == hand_id
 
 
+def _head_and_left(p) -> list[np.ndarray]:
+    return [p["head"], p["left_hand"]]
+
+
+def shaking_hands(hold: int):
+    """Two people 1 m apart (a at x = 2.0 facing +x, b at x = 3.0 facing -x), at rest for 45
+    frames; then their right hands meet over eight frames (one candidate once they are
+    close) and stay clasped for ``hold`` frames. Returns (frames, a, b, meeting point)."""
+    a, b = body((2.0, 2.0), 0.0), body((3.0, 2.0), 180.0)
+    meet = np.array([2.5, 2.0, 1.05])
+    rest = _head_and_left
+    frames = [[*rest(a), a["right_hand"], *rest(b), b["right_hand"]] for _ in range(45)]
+    for u in np.linspace(0, 1, 9)[1:]:
+        ra = a["right_hand"] + u * (meet - a["right_hand"])
+        rb = b["right_hand"] + u * (meet - b["right_hand"])
+        frames.append([*rest(a), *rest(b), *merged([ra, rb])])
+    frames += [[*rest(a), *rest(b), meet] for _ in range(hold)]
+    return frames, a, b, meet
+
+
 def handshake_with_ghost_frames():
     """Two people 1 m apart (a at x = 2.0 facing +x, b at x = 3.0 facing -x) shake right hands
     at frame 45; their hands merge into one candidate for six frames. Then b's hand goes home
@@ -588,15 +608,8 @@ def handshake_with_ghost_frames():
     mismatched blob pair shows 35 cm above b's left hand from the fifth frame after the
     parting (the pair, following b's hand, is out of a's reach by then). Returns
     (frames, a, b)."""
-    a, b = body((2.0, 2.0), 0.0), body((3.0, 2.0), 180.0)
-    meet = np.array([2.5, 2.0, 1.05])
-    rest = lambda p: [p["head"], p["left_hand"]]  # noqa: E731
-    frames = [[*rest(a), a["right_hand"], *rest(b), b["right_hand"]] for _ in range(45)]
-    for u in np.linspace(0, 1, 9)[1:]:
-        ra = a["right_hand"] + u * (meet - a["right_hand"])
-        rb = b["right_hand"] + u * (meet - b["right_hand"])
-        frames.append([*rest(a), *rest(b), *merged([ra, rb])])
-    frames += [[*rest(a), *rest(b), meet] for _ in range(6)]
+    frames, a, b, meet = shaking_hands(hold=6)
+    rest = _head_and_left
     home_b = [meet + u * (b["right_hand"] - meet) for u in np.linspace(0, 1, 7)[1:]]
     home_b += [b["right_hand"]] * 30
     for k, rb in enumerate(home_b):
@@ -646,16 +659,9 @@ def test_a_ghost_that_stood_beside_the_hands_as_they_joined_does_not_part_them(
     hand leaving the pair: the pair stays combined until the hands part, and each hand keeps
     its owner's label. Without the rule (an unbounded leave speed) the pair parts onto the
     ghost while the hands are still joined."""
-    a, b = body((2.0, 2.0), 0.0), body((3.0, 2.0), 180.0)
-    meet = np.array([2.5, 2.0, 1.05])
+    frames, a, b, meet = shaking_hands(hold=30)
+    rest = _head_and_left
     ghost = np.array([2.9, 2.15, 1.3])
-    rest = lambda p: [p["head"], p["left_hand"]]  # noqa: E731
-    frames = [[*rest(a), a["right_hand"], *rest(b), b["right_hand"]] for _ in range(45)]
-    for u in np.linspace(0, 1, 9)[1:]:
-        ra = a["right_hand"] + u * (meet - a["right_hand"])
-        rb = b["right_hand"] + u * (meet - b["right_hand"])
-        frames.append([*rest(a), *rest(b), *merged([ra, rb])])
-    frames += [[*rest(a), *rest(b), meet] for _ in range(30)]
     for u in np.linspace(0, 1, 7)[1:]:
         frames.append(
             [
