@@ -181,8 +181,8 @@ class Pipeline:
         return np.array(old).reshape(-1, 3)
 
     def _people_px(self, cam: str) -> np.ndarray:
-        """(N, 2) where the previous frame set's people (heads and hands of labelled
-        persons) project in camera ``cam``, pixels; only points in front of it."""
+        """(N, 2) where the previous frame set's protected people (:meth:`_protected_people`)
+        project in camera ``cam``, pixels; only points in front of it."""
         if len(self._people_m) == 0:
             return np.zeros((0, 2))
         px, depth = self.rig[cam].project(self._people_m)

@@ -570,8 +570,10 @@ class MultiTargetTracker:
         return seeds
 
     def _log_unexplained(self, pts: np.ndarray, t_ns: int) -> None:
+        """Remember this frame set's unexplained candidates (``pts``, owned by the log from
+        now on) and forget those older than ``UNEXPLAINED_LOG_S``."""
         log_ = self._unexplained_log
-        log_.append((t_ns, pts.copy()))
+        log_.append((t_ns, pts))
         while log_ and (t_ns - log_[0][0]) * 1e-9 > UNEXPLAINED_LOG_S:
             log_.popleft()
 
@@ -590,13 +592,13 @@ class MultiTargetTracker:
             return False
         seed_m = seed.position_m
         travel_s = max(float(np.linalg.norm(seed_m - pair.joined_m)) - lc.init_gate_m, 0.0)
-        travel_s /= lc.leave_speed_mps
-        for t_ns, pts in self._unexplained_log:
-            if t_ns >= seed.first_ns:
+        travel_ns = travel_s / lc.leave_speed_mps * 1e9
+        start_ns = pair.joined_ns - travel_ns
+        stop_ns = min(pair.joined_ns + travel_ns, seed.first_ns)
+        for t_ns, pts in self._unexplained_log:  # oldest first
+            if t_ns >= stop_ns:
                 break
-            if abs(t_ns - pair.joined_ns) * 1e-9 >= travel_s or not len(pts):
-                continue
-            if (np.linalg.norm(pts - seed_m, axis=1) <= lc.init_gate_m).any():
+            if t_ns > start_ns and (np.linalg.norm(pts - seed_m, axis=1) <= lc.init_gate_m).any():
                 return True
         return False
 

@@ -142,6 +142,9 @@ def test_learning_phase_then_slow_rate_keeps_a_standing_person(rng):
     assert model.learning and model.n_frames == 0
 
 
+HEAD_PX = np.array([[50.0, 35.0]])  # the standing person's head, as a tracker reports it
+
+
 def _stand(model, frame, n, person_px=None, box=None):
     """n frames of a person standing at rows 30:90, cols 40:60 (and, with ``box``, a still
     object there), the person's head passed as ``people_px``."""
@@ -160,13 +163,12 @@ def test_a_tracked_person_is_not_learnt_into_the_background_however_long_they_st
     cfg = BackgroundConfig(
         learning_frames=10, learning_rate=0.02, min_person_area_px=100, model_scale=scale
     )
-    head = np.array([[50.0, 35.0]])
     free, kept = BackgroundModel(cfg, (H, W)), BackgroundModel(cfg, (H, W))
     _, frame = _scene(rng)
     _learn(free, frame, 10)
     _learn(kept, frame, 10)
     assert _stand(free, frame, 80).n == 0  # absorbed
-    sil = _stand(kept, frame, 80, person_px=head)
+    sil = _stand(kept, frame, 80, person_px=HEAD_PX)
     assert sil.n == 1 and sil.mask[30:90, 40:60].mean() > 0.95
     # and when nobody is tracked the model learns everything again
     assert _stand(kept, frame, 80, person_px=np.zeros((0, 2))).n == 0
@@ -176,25 +178,23 @@ def test_what_no_tracked_person_holds_is_still_learnt_at_the_usual_rate(rng):
     # a bag put down (not a person: nothing tracked on it) is absorbed as without protection,
     # while the person beside it stays
     cfg = BackgroundConfig(learning_frames=10, learning_rate=0.02, min_person_area_px=100)
-    head = np.array([[50.0, 35.0]])
     model = BackgroundModel(cfg, (H, W))
     _, frame = _scene(rng)
     _learn(model, frame, 10)
     bag = (slice(70, 100), slice(100, 130))
-    sil = _stand(model, frame, 8, person_px=head, box=bag)
+    sil = _stand(model, frame, 8, person_px=HEAD_PX, box=bag)
     assert sil.n == 2  # the bag is new
-    sil = _stand(model, frame, 80, person_px=head, box=bag)
+    sil = _stand(model, frame, 80, person_px=HEAD_PX, box=bag)
     assert sil.n == 1 and sil.labels[60, 50] == 1 and sil.labels[85, 115] == 0
 
 
 def test_protection_is_off_during_learning_and_when_disabled(rng):
     # people present from the start are learnt (the learning phase assumes an empty room),
     # and protect_people = false gives MOG2's own behaviour
-    head = np.array([[50.0, 35.0]])
     _, frame = _scene(rng)
     cfg = BackgroundConfig(learning_frames=30, learning_rate=0.02, min_person_area_px=100)
     learning = BackgroundModel(cfg, (H, W))
-    assert _stand(learning, frame, 30, person_px=head).n == 0
+    assert _stand(learning, frame, 30, person_px=HEAD_PX).n == 0
     off = BackgroundModel(
         BackgroundConfig(
             learning_frames=10, learning_rate=0.02, min_person_area_px=100, protect_people=False
@@ -202,7 +202,7 @@ def test_protection_is_off_during_learning_and_when_disabled(rng):
         (H, W),
     )
     _learn(off, frame, 10)
-    assert _stand(off, frame, 80, person_px=head).n == 0
+    assert _stand(off, frame, 80, person_px=HEAD_PX).n == 0
 
 
 def test_a_camera_starting_late_learns_only_what_is_left_of_the_learning_phase(rng):
