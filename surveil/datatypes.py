@@ -431,6 +431,8 @@ class Transition:
     position_m : (3,) float64 -- its estimate at the change, world frame, metres
     partner_id : int | None -- for joins and separations, the other tracker involved
     partner_label : str | None -- that tracker's label before the change
+    met : bool -- for separations: False when the tracker found that the pair's targets never
+        met (the join is revoked: no coincidence happened; docs/tracking.md, "never met")
     """
 
     t_ns: int
@@ -441,6 +443,7 @@ class Transition:
     position_m: np.ndarray
     partner_id: int | None = None
     partner_label: str | None = None
+    met: bool = True
 
     def __post_init__(self) -> None:
         pos = np.asarray(self.position_m, dtype=np.float64)

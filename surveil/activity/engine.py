@@ -10,7 +10,8 @@ The limbs' labels from before the join and the carry estimates at the first cont
 the carry stage freezes estimates while hands overlap; a hand whose estimate there is not
 confident takes its latest confident one of the ``max_approach_s`` before) are kept. The
 episode is separated by the combined -> unlabelled transition (or, if it never combined, when
-the distance exceeds ``coincidence_m`` again). The **post-separation point** is
+the distance exceeds ``coincidence_m`` again); a separation at which the tracker found that the
+two never met (``Transition.met`` False) drops the episode. The **post-separation point** is
 the first frame set at least ``separation_delay_s`` after the two targets are ``separation_m``
 apart at which the carry estimates the rule looks at are confident (``min_confidence``), or
 ``separation_timeout_s`` after the separation, whichever comes first; the carry estimates there
@@ -408,6 +409,12 @@ class ActivityEngine:
                         ep.combined = True
                         continue
                     self._open_pair(rule, ids, labels, cur.t_ns, combined=True)
+            elif tr.old is Phase.COMBINED and not tr.met:
+                # the tracker found that the two never met: the join was no coincidence
+                for key, ep in list(self._pairs.items()):
+                    if tr.target_id in ep.ids and ep.separated_ns is None:
+                        log.debug("%s: %s never met", ep.rule.rule_id, "+".join(ep.labels))
+                        del self._pairs[key]
             elif tr.old is Phase.COMBINED and tr.new in (Phase.UNLABELLED, Phase.NORMAL):
                 for ep in self._pairs.values():
                     if tr.target_id not in ep.ids or ep.separated_ns is not None:

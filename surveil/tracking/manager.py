@@ -104,6 +104,8 @@ class _Track:
     partner: int | None = None
     joined_ns: int | None = None  # when it entered its current combined state
     joined_m: np.ndarray | None = None  # its estimate then
+    joined_apart: bool = False  # it combined while combine_distance_m or more from its partner
+    unjoin_frames: int = 0  # consecutive frame sets whose modes say the pair never met
     body_fails: int = 0  # frame sets in which it failed the body check (a head candidate)
     before_vec_m: np.ndarray | None = None
     apart_frames: int = 0
@@ -246,7 +248,7 @@ class MultiTargetTracker:
 
         self._filter(pts, prior, dt_s)
         pairs, drifted = self._combine_pairs()
-        self._measure_separation(pts, prior, dt_s)
+        self._measure_separation(pts, prior, dt_s, t_ns)
         seeds = self._update_seeds(pts, prior, dt_s, t_ns)
         reacquired = self._reacquire(seeds, t_ns)
         merged = self._merge_lost(t_ns, reacquired, pairs, seeds)
@@ -463,7 +465,9 @@ class MultiTargetTracker:
             return -np.inf
         return float(np.linalg.norm(b0 - a0) - np.linalg.norm(b1 - a1)) / ((t1 - t0) * 1e-9)
 
-    def _measure_separation(self, pts: np.ndarray, prior: np.ndarray, dt_s: float) -> None:
+    def _measure_separation(
+        self, pts: np.ndarray, prior: np.ndarray, dt_s: float, t_ns: int
+    ) -> None:
         """The modes of each combined pair's posterior, from the candidates it claims.
 
         Under eq. 17 the posterior's modes sit on candidates. A pair has two modes when,
@@ -474,7 +478,8 @@ class MultiTargetTracker:
         modes, count the consecutive frames (``apart_frames``) and how much farther apart the
         modes moved since they appeared (``split_gain_m``): parting targets move apart, while
         a stray candidate beside joined hands (a bare forearm, a mismatched blob pair) stays
-        where it appeared."""
+        where it appeared. Frames whose modes say the pair never met (:meth:`_never_met`)
+        are counted too (``unjoin_frames``)."""
         lc = self.cfg.lifecycle
         done: set[int] = set()
         for tr in self._tracks.values():
@@ -509,12 +514,53 @@ class MultiTargetTracker:
             apart = 0 if split is None else (tr.apart_frames + 1 if continued else 1)
             dist = 0.0 if split is None else float(np.linalg.norm(split[1] - split[0]))
             first = dist if apart <= 1 else tr.split_first_m
+            never = (
+                split is not None
+                and dist - first < lc.separate_gain_m
+                and self._never_met(tr, other, split, t_ns, tr.unjoin_frames == 0)
+            )
+            unjoin = tr.unjoin_frames + 1 if never else 0
             for t in (tr, other):
+                t.unjoin_frames = unjoin
                 t.apart_frames = apart
                 t.split_m = split
                 t.split_vel_mps = vel
                 t.split_first_m = first
                 t.split_gain_m = dist - first
+
+    def _never_met(
+        self, a: _Track, b: _Track, modes: np.ndarray, t_ns: int, starting: bool
+    ) -> bool:
+        """Whether a combined pair's two modes (``modes``, (2, 3)) say its targets never met:
+        it combined while its trackers were ``combine_distance_m`` or more apart (one had
+        lost its candidate beside the other: :meth:`_combine_pairs`), and each mode lies
+        within ``unjoin_gate_m`` of where one of the two trackers was at the join; a run of
+        such frames (``starting``: this would be its first) must begin at most
+        ``unjoin_within_s`` after the join. Two hands held out near each other (the
+        negative scene: 27 cm apart for a second) lose a candidate now and then when their
+        blobs touch in one view; their candidates come back at once where the hands stayed.
+        Hands that met are together for a while, and leave the meeting point when they
+        part."""
+        lc = self.cfg.lifecycle
+        if (
+            lc.unjoin_gate_m <= 0
+            or not a.joined_apart
+            or a.joined_ns is None
+            or a.joined_m is None
+            or b.joined_m is None
+            or (starting and (t_ns - a.joined_ns) * 1e-9 > lc.unjoin_within_s)
+        ):
+            return False
+        return self._modes_by_place(a, b, modes)[1] <= lc.unjoin_gate_m
+
+    @staticmethod
+    def _modes_by_place(a: _Track, b: _Track, modes: np.ndarray) -> tuple[tuple[int, int], float]:
+        """The modes of a and b, by where the two were at their join (``joined_m``): the
+        assignment whose farther mode is nearer its tracker's place, and that distance, m."""
+        pre = np.array([a.joined_m, b.joined_m])
+        straight = float(np.linalg.norm(modes - pre, axis=1).max())
+        crossed = float(np.linalg.norm(modes[::-1] - pre, axis=1).max())
+        return ((0, 1), straight) if straight <= crossed else ((1, 0), crossed)
 
     def _unexplained(self, pts: np.ndarray, prior: np.ndarray, min_prior: float) -> np.ndarray:
         """Indices of candidates with prior >= min_prior farther than explained_radius_m
@@ -1233,8 +1279,11 @@ class MultiTargetTracker:
                 misses=tr.misses,
                 drifted=tr.id in drifted,
                 partner_id=pairs.get(tr.id),
-                separated=tr.apart_frames >= lc.separate_frames
-                and tr.split_gain_m >= lc.separate_gain_m,
+                separated=(
+                    tr.apart_frames >= lc.separate_frames
+                    and tr.split_gain_m >= lc.separate_gain_m
+                )
+                or tr.unjoin_frames >= lc.separate_frames,
                 labelled=tr.labelled,
                 reacquired=tr.id in reacquired or tr.id in merged,
                 lost_for_s=(t_ns - tr.lost_since_ns) * 1e-9
@@ -1278,19 +1327,25 @@ class MultiTargetTracker:
             if new is old:
                 continue
             partner_id: int | None = None
+            met = True
             if new is Phase.COMBINED:
                 partner_id = pairs[tid]
                 tr.partner = partner_id
                 tr.joined_ns, tr.joined_m = t_ns, tr.mean_m.copy()
+                gap = float(np.linalg.norm(tr.mean_m - self._tracks[partner_id].mean_m))
+                tr.joined_apart = gap >= lc.combine_distance_m
+                tr.unjoin_frames = 0
                 tr.before_vec_m = self._before_vector(tr, self._tracks[partner_id])
                 tr.apart_frames = 0
             elif old is Phase.COMBINED:
                 partner_id = tr.partner
+                met = tr.unjoin_frames < lc.separate_frames
                 if new is Phase.UNLABELLED and tid not in separated_done:
-                    self._separate(tr, self._tracks[partner_id])
+                    self._separate(tr, self._tracks[partner_id], met)
                     separated_done.update((tid, partner_id))
                 tr.partner = None
                 tr.joined_ns = tr.joined_m = None
+                tr.joined_apart, tr.unjoin_frames = False, 0
                 tr.before_vec_m = None
                 tr.apart_frames = 0
                 tr.split_m = tr.split_vel_mps = None
@@ -1320,6 +1375,7 @@ class MultiTargetTracker:
                     position_m=tr.mean_m,
                     partner_id=partner_id,
                     partner_label=before[partner_id][0] if partner_id in before else None,
+                    met=met,
                 )
             )
             tr.phase = new
@@ -1342,12 +1398,19 @@ class MultiTargetTracker:
                 return pb - pa
         return common[0][2] - common[0][1]
 
-    def _separate(self, a: _Track, b: _Track) -> None:
+    def _separate(self, a: _Track, b: _Track, met: bool = True) -> None:
         """Give a and b each a mode of the separating pair and restart them there: two people's
         hands by their owners when that is clear (:func:`lab.owner_rule`, ``owner_margin_m``),
-        otherwise by the angle rule (section 7.1)."""
+        otherwise by the angle rule (section 7.1); a pair that never met (:meth:`_never_met`)
+        by where each tracker was at the join."""
         modes, vel = a.split_m, a.split_vel_mps
         if modes is None or vel is None:
+            return
+        if not met:
+            (mode_a, mode_b), _ = self._modes_by_place(a, b, modes)
+            log.debug("t%d / t%d never met: apart where they were at the join", a.id, b.id)
+            self._reinit(a, modes[mode_a], vel[mode_a])
+            self._reinit(b, modes[mode_b], vel[mode_b])
             return
         heads = self._owner_heads(a, b)
         margin = self.cfg.labelling.owner_margin_m

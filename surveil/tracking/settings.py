@@ -149,6 +149,20 @@ class LifecycleConfig:
         "not move away from them), m",
         min=0.0,
     )
+    unjoin_gate_m: float = setting(
+        0.15,
+        "a pair that combined while its trackers were combine_distance_m or more apart (one "
+        "had lost its candidate) and whose two modes, from at most unjoin_within_s after the "
+        "join, stay (separate_frames, gaining less than separate_gain_m) this close to where "
+        "its two trackers were then, never met: it separates, each tracker where it was, and "
+        "no coincidence is reported (0 = off), m",
+        min=0.0,
+    )
+    unjoin_within_s: float = setting(
+        0.15,
+        "how soon after a join the modes that say its targets never met must appear, s",
+        min=0.0,
+    )
     lost_level: float = setting(
         0.05,
         "a tracker whose best particle's support max_i sum_c exp(-d_ic^2/2s^2) p(Z_c) stays "
