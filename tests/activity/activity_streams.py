@@ -71,7 +71,8 @@ class Track:
 class Join:
     """Trackers ``a`` and ``b`` are combined from ``t_join_s`` to ``t_sep_s``; afterwards they
     are unlabelled for ``relabel_s``. With ``swap``, tracker a follows b's limb after the
-    separation (and gets its label), as when the tracker's identities cross."""
+    separation (and gets its label), as when the tracker's identities cross. With ``met``
+    False the tracker reports at the separation that the two never met."""
 
     a: int
     b: int
@@ -79,6 +80,7 @@ class Join:
     t_sep_s: float
     relabel_s: float = 0.3
     swap: bool = False
+    met: bool = True
 
 
 @dataclass
@@ -154,10 +156,11 @@ class Script:
                 old = prev.get(snap.target_id)
                 if old is None or old.phase is snap.phase:
                     continue
-                partner = None
+                partner, met = None, True
                 for j in self.joins:
                     if snap.target_id in (j.a, j.b):
                         partner = j.b if snap.target_id == j.a else j.a
+                        met = j.met or old.phase is not Phase.COMBINED
                 pairing = snap.phase is Phase.COMBINED or old.phase is Phase.COMBINED
                 transitions.append(
                     Transition(
@@ -169,6 +172,7 @@ class Script:
                         snap.mean_m,
                         partner if pairing else None,
                         prev[partner].label if pairing and partner is not None else None,
+                        met,
                     )
                 )
             out.append((TrackFrame(t_ns, targets, tuple(transitions)), carry))

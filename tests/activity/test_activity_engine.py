@@ -267,6 +267,17 @@ def test_receiving_hand_that_stops_after_an_exchange_is_not_a_pick(rules):
 # ---- negatives -------------------------------------------------------------------------------
 
 
+@pytest.mark.parametrize("met", [True, False])
+def test_a_join_the_tracker_finds_never_met_is_no_coincidence(rules, met):
+    """The tracker combined two hands held 27 cm apart and separated them at once, finding
+    that they never met (``Transition.met`` False): no handshake. The same join and
+    separation of hands that met is one."""
+    script = two_people(gap=0.27)
+    script.joins = [Join(3, 6, 1.0, 1.2, met=met)]
+    events = run(rules, script.stream())
+    assert [e.activity for e in events] == (["handshake"] if met else [])
+
+
 def test_approach_without_coincidence_is_no_event(rules):
     """Hands stop 0.2 m apart (beyond coincidence_m) and the tracker never combines them."""
     assert run(rules, two_people(join=False, gap=0.2).stream()) == []

@@ -939,3 +939,52 @@ def test_a_ghost_tracker_that_slides_into_joined_hands_is_lost_and_the_pair_part
     final = by_label(out[-1])
     assert np.linalg.norm(final["p1/left_hand"] - sides[-1][0]) < 0.04
     assert np.linalg.norm(final["p1/right_hand"] - sides[-1][1]) < 0.04
+
+
+def near_miss_frames(gap_m: float, slide_m: float):
+    """Two people (a at x 2.0 facing b at x 3.0) raise their right hands towards each other
+    and hold them ``gap_m`` apart and still (the negative scene: 27 cm). One frame set after
+    they stop, a's candidate is missing and one candidate lies ``slide_m`` from b's hand
+    towards a's (their blobs touched in one view); then both candidates are back where the
+    hands are. Returns (frames, a's held hand, b's held hand)."""
+    a, b = body((2.0, 2.0), 0.0), body((3.0, 2.0), 180.0)
+    mid = np.array([2.5, 1.96, 1.05])
+    held_a, held_b = mid - [gap_m / 2, 0, 0], mid + [gap_m / 2, 0, 0]
+    rest = [a["head"], a["left_hand"], b["head"], b["left_hand"]]
+    frames = [[*rest, a["right_hand"], b["right_hand"]] for _ in range(40)]
+    for u in np.linspace(0, 1, 9)[1:]:
+        frames.append(
+            [
+                *rest,
+                a["right_hand"] + u * (held_a - a["right_hand"]),
+                b["right_hand"] + u * (held_b - b["right_hand"]),
+            ]
+        )
+    touched = held_b + slide_m * (held_a - held_b) / gap_m
+    frames += [[*rest, held_a, held_b], [*rest, touched]] + [[*rest, held_a, held_b]] * 20
+    return frames, held_a, held_b
+
+
+@pytest.mark.parametrize("gate_m", [0.15, 0.0])
+def test_hands_held_near_each_other_that_never_met_are_parted_where_they_were(rig, gate_m):
+    """Two right hands stop 27 cm apart; a's candidate vanishes for one frame set beside
+    b's, so the two combine (one lost its candidate within hand_merge_distance_m of the other
+    while approaching it). Their candidates come back at once where the hands are: the pair
+    separates two frame sets later with ``met`` False, each tracker on its own hand with
+    its label. With unjoin_gate_m = 0 the pair stays combined while the hands stay still,
+    and would part as a handshake when they leave."""
+    frames, held_a, held_b = near_miss_frames(0.27, 0.05)
+    lc = LifecycleConfig(unjoin_gate_m=gate_m)
+    trk = MultiTargetTracker(TrackingConfig(lifecycle=lc), rig, seed=13)
+    out = run(trk, frames, np.random.default_rng(7))
+    joins = [t for f in out for t in f.transitions if t.new is Phase.COMBINED]
+    parts = [t for f in out for t in f.transitions if t.old is Phase.COMBINED]
+    assert {t.label for t in joins} == {"p1/right_hand", "p2/right_hand"}
+    if gate_m > 0:
+        assert len(parts) == 2 and not any(t.met for t in parts)
+        assert parts[0].t_ns - joins[0].t_ns <= 3 * DT_NS
+        assert _owner_of(out[-1], held_a) == "p1/right_hand"
+        assert _owner_of(out[-1], held_b) == "p2/right_hand"
+    else:
+        assert not parts
+        assert all(s.phase is Phase.COMBINED for s in out[-1].targets if "right" in s.label)
