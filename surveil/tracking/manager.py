@@ -1280,8 +1280,7 @@ class MultiTargetTracker:
                 drifted=tr.id in drifted,
                 partner_id=pairs.get(tr.id),
                 separated=(
-                    tr.apart_frames >= lc.separate_frames
-                    and tr.split_gain_m >= lc.separate_gain_m
+                    tr.apart_frames >= lc.separate_frames and tr.split_gain_m >= lc.separate_gain_m
                 )
                 or tr.unjoin_frames >= lc.separate_frames,
                 labelled=tr.labelled,
