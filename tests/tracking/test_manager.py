@@ -720,17 +720,11 @@ def test_a_hand_taken_for_the_wrong_person_is_relabelled(rig, rng, revise_s):
         assert _owner_of(out[-1], b["right_hand"]).startswith("p1/")
 
 
-@pytest.mark.parametrize("closing_mps", [0.3, -1e9])
-def test_a_still_hand_that_loses_its_candidate_beside_another_has_not_met_it(
-    rig, rng, closing_mps
-):
-    """Two people hold their right hands out, 24 cm apart and still (the negative scene);
-    then a's candidate vanishes for ten frame sets. a's hand was not approaching b's before
-    its miss, so they have not met: a's tracker is lost, not merged onto b's hand, and no
-    combined state opens (no handshake later); a's hand keeps its label when it shows again.
-    With the closing-speed guard off (and in session 10's tracker) the two combine."""
+def right_hands_held_out(held_a, held_b) -> tuple[list, list]:
+    """Two people, a at x 2.0 facing b at x 3.0, stand still for 40 frame sets, then raise
+    their right hands to ``held_a`` and ``held_b`` in 8. Returns (those frames, the other
+    limbs at rest: heads and left hands)."""
     a, b = body((2.0, 2.0), 0.0), body((3.0, 2.0), 180.0)
-    held_a, held_b = np.array([2.38, 1.95, 1.05]), np.array([2.62, 1.97, 1.05])
     rest = [a["head"], a["left_hand"], b["head"], b["left_hand"]]
     frames = [[*rest, a["right_hand"], b["right_hand"]] for _ in range(40)]
     for u in np.linspace(0, 1, 9)[1:]:
@@ -741,6 +735,21 @@ def test_a_still_hand_that_loses_its_candidate_beside_another_has_not_met_it(
                 b["right_hand"] + u * (held_b - b["right_hand"]),
             ]
         )
+    return frames, rest
+
+
+@pytest.mark.parametrize("closing_mps", [0.3, -1e9])
+def test_a_still_hand_that_loses_its_candidate_beside_another_has_not_met_it(
+    rig, rng, closing_mps
+):
+    """Two people hold their right hands out, 24 cm apart and still (the negative scene);
+    then a's candidate vanishes for ten frame sets. a's hand was not approaching b's before
+    its miss, so they have not met: a's tracker is lost, not merged onto b's hand, and no
+    combined state opens (no handshake later); a's hand keeps its label when it shows again.
+    With the closing-speed guard off (and in session 10's tracker) the two combine."""
+    a = body((2.0, 2.0), 0.0)
+    held_a, held_b = np.array([2.38, 1.95, 1.05]), np.array([2.62, 1.97, 1.05])
+    frames, rest = right_hands_held_out(held_a, held_b)
     frames += [[*rest, held_a, held_b]] * 15 + [[*rest, held_b]] * 10
     frames += [[*rest, held_a, held_b]] * 10
     lc = LifecycleConfig(merge_closing_mps=closing_mps)
@@ -947,19 +956,9 @@ def near_miss_frames(gap_m: float, slide_m: float):
     they stop, a's candidate is missing and one candidate lies ``slide_m`` from b's hand
     towards a's (their blobs touched in one view); then both candidates are back where the
     hands are. Returns (frames, a's held hand, b's held hand)."""
-    a, b = body((2.0, 2.0), 0.0), body((3.0, 2.0), 180.0)
     mid = np.array([2.5, 1.96, 1.05])
     held_a, held_b = mid - [gap_m / 2, 0, 0], mid + [gap_m / 2, 0, 0]
-    rest = [a["head"], a["left_hand"], b["head"], b["left_hand"]]
-    frames = [[*rest, a["right_hand"], b["right_hand"]] for _ in range(40)]
-    for u in np.linspace(0, 1, 9)[1:]:
-        frames.append(
-            [
-                *rest,
-                a["right_hand"] + u * (held_a - a["right_hand"]),
-                b["right_hand"] + u * (held_b - b["right_hand"]),
-            ]
-        )
+    frames, rest = right_hands_held_out(held_a, held_b)
     touched = held_b + slide_m * (held_a - held_b) / gap_m
     frames += [[*rest, held_a, held_b], [*rest, touched]] + [[*rest, held_a, held_b]] * 20
     return frames, held_a, held_b
