@@ -1405,18 +1405,17 @@ class MultiTargetTracker:
         modes, vel = a.split_m, a.split_vel_mps
         if modes is None or vel is None:
             return
-        if not met:
-            (mode_a, mode_b), _ = self._modes_by_place(a, b, modes)
-            log.debug("t%d / t%d never met: apart where they were at the join", a.id, b.id)
-            self._reinit(a, modes[mode_a], vel[mode_a])
-            self._reinit(b, modes[mode_b], vel[mode_b])
-            return
         heads = self._owner_heads(a, b)
         margin = self.cfg.labelling.owner_margin_m
         by_owner = (
-            lab.owner_rule(modes, heads, margin) if heads is not None and margin > 0 else None
+            lab.owner_rule(modes, heads, margin)
+            if met and heads is not None and margin > 0
+            else None
         )
-        if by_owner is not None:
+        if not met:
+            (mode_a, mode_b), _ = self._modes_by_place(a, b, modes)
+            log.debug("t%d / t%d never met: apart where they were at the join", a.id, b.id)
+        elif by_owner is not None:
             (mode_a, mode_b), gain = by_owner
             log.debug("t%d / t%d separate by their owners (%.2f m shorter)", a.id, b.id, gain)
         else:
