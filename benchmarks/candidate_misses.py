@@ -20,6 +20,8 @@ For every true head or hand seen by >= 2 cameras (ground truth) with no candidat
 - ``merging``: the pair survives the prior but is absorbed by a candidate > 100 mm away;
 - ``explained away``: dropped as a ghost (docs/candidates.md).
 
+``--by-limb`` adds a table per scenario with every true limb's own misses and causes.
+
 ``--approach S`` counts only the actors of the true events (the hands, or hand and head, that
 meet) during the S seconds up to each climax: the approach, where a lost candidate costs the
 tracker its target just before the decision point.
@@ -133,7 +135,9 @@ def classify_miss(
         cams = np.array([pair[side] for pair in pairs])
         if cfg.rel_v_to_floor:
             rows = np.array([[r[own[m]] for r in blob_rows(obs_by_cam[m])] for m in cams])
-            d_v.append(floor_relative_v(pts, cams, rows[:, 0], rows[:, 1], rig))
+            d_v.append(
+                floor_relative_v(pts, cams, rows[:, 0], rows[:, 1], rig)
+            )
         else:
             d_v.append(np.array([obs_by_cam[m].blobs.rel_v[own[m]] for m in cams]))
     p_o = gauss_term(d_v[0] - d_v[1], cfg.sigma_rel_v)
@@ -180,8 +184,9 @@ def misses_of(
     radius_px: float,
     config: PipelineConfig,
     approach_s: float | None = None,
-) -> tuple[Counter, int, float]:
-    """Miss causes, the number of countable limb-frames, false candidates per frame set."""
+) -> tuple[Counter, Counter, float]:
+    """Miss causes keyed by (limb label, cause), countable limb-frames per limb label,
+    false candidates per frame set."""
     rec = open_recording(rec_dir)
     gt = load_ground_truth(rec_dir)
     bg_cfg, cfg = config.background, config.candidates
@@ -190,7 +195,8 @@ def misses_of(
     cam_index = {c: rec.rig.names.index(c) for c in gt.cameras}
     only = approach_mask(gt, approach_s) if approach_s is not None else None
     causes: Counter = Counter()
-    countable = n_sets = false = 0
+    countable: Counter = Counter()
+    n_sets = false = 0
     for fs, by_name, _ in observe_recording(rec, config, n_people, max_frames):
         obs_by_cam = {rec.rig.names.index(cam): obs for cam, obs in by_name.items()}
         if fs.index < bg_cfg.learning_frames:
@@ -202,7 +208,7 @@ def misses_of(
         seen2 = np.isfinite(truth).all(axis=1) & (gt.n_views[i] >= 2)
         if only is not None:
             seen2 &= only[i]
-        countable += int(seen2.sum())
+        countable.update(gt.labels[j] for j in np.flatnonzero(seen2))
         n_sets += 1
         missed = seen2.copy()
         if len(cands.points_m):
@@ -215,7 +221,8 @@ def misses_of(
         loose = make_candidates(observations, rec.rig, no_explaining).points_m
         for j in np.flatnonzero(missed):
             cams = [cam_index[c] for c, v in zip(gt.cameras, gt.visible[i, j], strict=True) if v]
-            causes[classify_miss(truth[j], cams, obs_by_cam, rec.rig, cfg, loose, radius_px)] += 1
+            cause = classify_miss(truth[j], cams, obs_by_cam, rec.rig, cfg, loose, radius_px)
+            causes[gt.labels[j], cause] += 1
     return causes, countable, false / max(n_sets, 1)
 
 
@@ -229,23 +236,41 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--approach", type=float, metavar="S", help="only event actors, S s before each climax"
     )
+    parser.add_argument(
+        "--by-limb", action="store_true", help="also a table per scenario, one row per limb"
+    )
     args = parser.parse_args(argv)
     config = load_pipeline_config(args.config)
     paths = [ROOT / "recordings" / f"{n}.toml" for n in args.names] or sorted(
         (ROOT / "recordings").glob("*.toml")
     )
+    limb_tables: dict[str, tuple[Counter, Counter]] = {}
     print("Fractions of the true limb-frames seen by >= 2 cameras, lost at each stage:\n")
     print("| scenario | limb-frames | false / set | missed | " + " | ".join(CAUSES) + " |")
     print("|---|---|---|---|" + "---|" * len(CAUSES))
     for path in paths:
         rec_dir = args.out / path.stem
         synthesise(path, rec_dir)
-        causes, n, false = misses_of(
+        by_limb, countable, false = misses_of(
             rec_dir, args.max_frames, args.radius_px, config, args.approach
         )
+        causes = Counter()
+        for (_, cause), k in by_limb.items():
+            causes[cause] += k
+        n = sum(countable.values())
         cells = " | ".join(f"{causes[c] / max(n, 1):.3f}" for c in CAUSES)
         missed = sum(causes.values()) / max(n, 1)
         print(f"| {path.stem} | {n} | {false:.2f} | {missed:.3f} | {cells} |", flush=True)
+        if args.by_limb:
+            limb_tables[path.stem] = (by_limb, countable)
+    for name, (by_limb, countable) in limb_tables.items():
+        print(f"\n{name}, per limb:\n")
+        print("| limb | limb-frames | missed | " + " | ".join(CAUSES) + " |")
+        print("|---|---|---|" + "---|" * len(CAUSES))
+        for limb, n in sorted(countable.items()):
+            own = [by_limb[limb, c] for c in CAUSES]
+            cells = " | ".join(f"{k / n:.3f}" for k in own)
+            print(f"| {limb} | {n} | {sum(own) / n:.3f} | {cells} |")
     return 0
 
 
