@@ -135,9 +135,7 @@ def classify_miss(
         cams = np.array([pair[side] for pair in pairs])
         if cfg.rel_v_to_floor:
             rows = np.array([[r[own[m]] for r in blob_rows(obs_by_cam[m])] for m in cams])
-            d_v.append(
-                floor_relative_v(pts, cams, rows[:, 0], rows[:, 1], rig)
-            )
+            d_v.append(floor_relative_v(pts, cams, rows[:, 0], rows[:, 1], rig))
         else:
             d_v.append(np.array([obs_by_cam[m].blobs.rel_v[own[m]] for m in cams]))
     p_o = gauss_term(d_v[0] - d_v[1], cfg.sigma_rel_v)
