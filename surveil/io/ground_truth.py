@@ -10,6 +10,13 @@ for users in docs/formats.md, "Ground truth"):
     ``frame,t_ns,label,x_m,y_m,z_m,visible_in`` -- one row per frame and true limb
     (``p1/head``, ``p1/left_hand``, ``p1/right_hand``...); ``visible_in`` lists the cameras
     (separated by ``;``) whose frame exists and shows the limb unoccluded.
+``joints.csv`` (optional)
+    ``frame,t_ns,label,x_m,y_m,z_m`` -- one row per frame and arm joint of each person
+    present (``p1/left_shoulder``, ``p1/left_elbow``, ``p1/left_wrist``, ``p1/right_shoulder``,
+    ``p1/right_elbow``, ``p1/right_wrist``...).
+``facing.csv`` (optional)
+    ``frame,t_ns,person,yaw_deg`` -- one row per frame and person present: the body's facing,
+    degrees in [-180, 180), 0 = +X, counter-clockwise (``surveil.synth.actors.body_axes``).
 ``objects.csv``
     ``frame,t_ns,object,x_m,y_m,z_m,held_by`` -- ``held_by`` is a hand label or empty.
 ``events.json``
@@ -28,7 +35,7 @@ from __future__ import annotations
 import csv
 import enum
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -37,6 +44,10 @@ from surveil.datatypes import ActivityEvent
 from surveil.errors import InputError
 
 GT_DIR = "ground_truth"
+JOINTS_CSV = "joints.csv"
+JOINTS_COLUMNS = ["frame", "t_ns", "label", "x_m", "y_m", "z_m"]
+FACING_CSV = "facing.csv"
+FACING_COLUMNS = ["frame", "t_ns", "person", "yaw_deg"]
 FORMAT_NAME = "surveil-ground-truth"
 FORMAT_VERSION = 1
 
@@ -64,6 +75,11 @@ class GroundTruth:
     object_positions_m : (F, O, 3) float64;  held_by : (F, O) str ('' when not held)
     events : true activities
     meta : the content of scene.json
+    joint_labels : (J,) arm-joint labels (``p1/left_shoulder``...); empty without joints.csv
+    joint_positions_m : (F, J, 3) float64 world frame (NaN where the person is absent)
+    persons : (P,) person ids of facing.csv; empty without it
+    facing_yaw_rad : (F, P) float64 body facing, radians in [-pi, pi), 0 = +X,
+        counter-clockwise (NaN where the person is absent)
     """
 
     frames: np.ndarray
@@ -78,6 +94,10 @@ class GroundTruth:
     held_by: np.ndarray
     events: tuple[ActivityEvent, ...]
     meta: dict
+    joint_labels: tuple[str, ...] = ()
+    joint_positions_m: np.ndarray = field(default_factory=lambda: np.full((0, 0, 3), np.nan))
+    persons: tuple[str, ...] = ()
+    facing_yaw_rad: np.ndarray = field(default_factory=lambda: np.full((0, 0), np.nan))
 
     @property
     def n_views(self) -> np.ndarray:
@@ -171,12 +191,56 @@ def write_ground_truth(directory: Path, gt: GroundTruth) -> None:
                         gt.held_by[i, k],
                     ]
                 )
+    _write_joints(directory / JOINTS_CSV, gt)
+    _write_facing(directory / FACING_CSV, gt)
     (directory / "events.json").write_text(
         json.dumps([event_to_dict(e) for e in gt.events], indent=2)
     )
 
 
-def _read_csv(path: Path, columns: list[str]) -> list[dict[str, str]]:
+def _write_joints(path: Path, gt: GroundTruth) -> None:
+    if not gt.joint_labels:
+        path.unlink(missing_ok=True)  # no stale joints from an earlier write
+        return
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(JOINTS_COLUMNS)
+        for i, (frame, t) in enumerate(zip(gt.frames, gt.t_ns, strict=True)):
+            for j, label in enumerate(gt.joint_labels):
+                x, y, z = gt.joint_positions_m[i, j]
+                if not np.isfinite(x):
+                    continue
+                w.writerow([int(frame), int(t), label, f"{x:.5f}", f"{y:.5f}", f"{z:.5f}"])
+
+
+def _write_facing(path: Path, gt: GroundTruth) -> None:
+    if not gt.persons:
+        path.unlink(missing_ok=True)
+        return
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(FACING_COLUMNS)
+        for i, (frame, t) in enumerate(zip(gt.frames, gt.t_ns, strict=True)):
+            for p, person in enumerate(gt.persons):
+                yaw = gt.facing_yaw_rad[i, p]
+                if not np.isfinite(yaw):
+                    continue
+                w.writerow([int(frame), int(t), person, f"{wrap_deg(np.degrees(yaw)):.4f}"])
+
+
+def wrap_deg(angle_deg: float) -> float:
+    """``angle_deg`` in [-180, 180).
+
+    >>> wrap_deg(540.0), wrap_deg(-190.0), wrap_deg(180.0)
+    (-180.0, 170.0, -180.0)
+    """
+    return float((angle_deg + 180.0) % 360.0 - 180.0)
+
+
+def _read_csv(path: Path, columns: list[str], *, optional: bool = False) -> list[dict[str, str]]:
+    """The rows of ``path``; an ``optional`` file that is missing has none."""
+    if optional and not path.is_file():
+        return []
     if not path.is_file():
         raise InputError(
             f"{path}: ground-truth file is missing; regenerate the recording "
@@ -266,6 +330,8 @@ def load_ground_truth(recording_dir: Path) -> GroundTruth:
         i, k = f_idx[int(r["frame"])], o_idx[r["object"]]
         obj_pos[i, k] = float(r["x_m"]), float(r["y_m"]), float(r["z_m"])
         held[i, k] = r["held_by"]
+    joint_labels, joint_pos = _read_joints(directory / JOINTS_CSV, f_idx)
+    persons, facing = _read_facing(directory / FACING_CSV, f_idx)
     events_path = directory / "events.json"
     events: tuple[ActivityEvent, ...] = ()
     if events_path.is_file():
@@ -289,4 +355,59 @@ def load_ground_truth(recording_dir: Path) -> GroundTruth:
         held_by=held,
         events=events,
         meta=meta,
+        joint_labels=joint_labels,
+        joint_positions_m=joint_pos,
+        persons=persons,
+        facing_yaw_rad=facing,
     )
+
+
+def _frame_index(path: Path, line: int, row: dict[str, str], f_idx: dict[int, int]) -> int:
+    """The row's index in the recording's frames; InputError for an unknown frame."""
+    try:
+        frame = int(row["frame"])
+    except (TypeError, ValueError):
+        raise InputError(
+            f"{path}:{line}: frame must be an integer, got {row['frame']!r}"
+        ) from None
+    if frame not in f_idx:
+        raise InputError(
+            f"{path}:{line}: frame {frame} is not a frame of the recording (frames come from "
+            f"limbs.csv, objects.csv and scene.json n_frames)"
+        )
+    return f_idx[frame]
+
+
+def _read_joints(path: Path, f_idx: dict[int, int]) -> tuple[tuple[str, ...], np.ndarray]:
+    """joints.csv, if present: labels (J,) and positions (F, J, 3) NaN where absent."""
+    rows = _read_csv(path, JOINTS_COLUMNS, optional=True)
+    labels = tuple(dict.fromkeys(r["label"] for r in rows))
+    j_idx = {lab: j for j, lab in enumerate(labels)}
+    pos = np.full((len(f_idx) if rows else 0, len(labels), 3), np.nan)
+    for n, r in enumerate(rows, start=2):
+        i = _frame_index(path, n, r, f_idx)
+        try:
+            pos[i, j_idx[r["label"]]] = float(r["x_m"]), float(r["y_m"]), float(r["z_m"])
+        except (TypeError, ValueError):
+            raise InputError(
+                f"{path}:{n}: coordinates must be numbers, got "
+                f"{r['x_m']!r}, {r['y_m']!r}, {r['z_m']!r}"
+            ) from None
+    return labels, pos
+
+
+def _read_facing(path: Path, f_idx: dict[int, int]) -> tuple[tuple[str, ...], np.ndarray]:
+    """facing.csv, if present: persons (P,) and yaw (F, P) radians, NaN where absent."""
+    rows = _read_csv(path, FACING_COLUMNS, optional=True)
+    persons = tuple(dict.fromkeys(r["person"] for r in rows))
+    p_idx = {pid: p for p, pid in enumerate(persons)}
+    yaw = np.full((len(f_idx) if rows else 0, len(persons)), np.nan)
+    for n, r in enumerate(rows, start=2):
+        i = _frame_index(path, n, r, f_idx)
+        try:
+            yaw[i, p_idx[r["person"]]] = np.radians(float(r["yaw_deg"]))
+        except (TypeError, ValueError):
+            raise InputError(
+                f"{path}:{n}: yaw_deg must be a number, got {r['yaw_deg']!r}"
+            ) from None
+    return persons, yaw

@@ -40,9 +40,12 @@ from surveil.synth.timeline import SIDES, Choreography, compile_scenario
 
 log = logging.getLogger(__name__)
 
-GENERATOR_VERSION = 2  # 2: empty-room lead-in
+# 2: empty-room lead-in
+# 3: arm joints and facing in the ground truth
+GENERATOR_VERSION = 3
 NS = 1_000_000_000
 LIMBS = ("head", "left_hand", "right_hand")
+ARM_JOINTS = ("shoulder", "elbow", "wrist")  # per side, left then right (joints.csv)
 MIN_VISIBLE_FRACTION = 0.5
 STRIDE_M = 1.4
 
@@ -275,6 +278,11 @@ def _render(
     labels = [f"{pid}/{limb}" for pid in ids for limb in LIMBS]
     positions = np.full((n_frames, len(labels), 3), np.nan)
     visible = np.zeros((n_frames, len(labels), len(cams)), dtype=bool)
+    joint_labels = [
+        f"{pid}/{side}_{joint}" for pid in ids for side in SIDES for joint in ARM_JOINTS
+    ]
+    joints = np.full((n_frames, len(joint_labels), 3), np.nan)
+    facing = np.full((n_frames, len(ids)), np.nan)
     obj_names = tuple(chor.objects)
     obj_pos = np.full((n_frames, len(obj_names), 3), np.nan)
     held = np.full((n_frames, len(obj_names)), "", dtype=object)
@@ -319,6 +327,14 @@ def _render(
             positions[k, j] = pose.head_m
             positions[k, j + 1] = pose.hands_m[0]
             positions[k, j + 2] = pose.hands_m[1]
+            j = joint_labels.index(f"{pid}/left_shoulder")
+            for i in range(len(SIDES)):
+                joints[k, j + 3 * i : j + 3 * i + 3] = (
+                    pose.shoulders_m[i],
+                    pose.elbows_m[i],
+                    pose.wrists_m[i],
+                )
+            facing[k, ids.index(pid)] = (pose.yaw_rad + np.pi) % (2 * np.pi) - np.pi
             light_xy = np.array([-0.45, -0.26])  # shadows fall away from the light
             for h, w in ((0.0, 0.7), (0.6, 0.5), (1.2, 0.35)):
                 casters.append((root[0] + h * light_xy[0], root[1] + h * light_xy[1], w))
@@ -422,6 +438,10 @@ def _render(
         held_by=held,
         events=events,
         meta=meta,
+        joint_labels=tuple(joint_labels),
+        joint_positions_m=joints,
+        persons=tuple(ids),
+        facing_yaw_rad=facing,
     )
     write_ground_truth(out / GT_DIR, gt)
     if preview:

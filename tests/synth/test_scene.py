@@ -11,7 +11,10 @@ from surveil.eval.truth_checks import visible_hands_on_skin
 from surveil.io.calibration import load_rig
 from surveil.io.ground_truth import MaskClass, load_ground_truth
 from surveil.io.recording import open_recording
+from surveil.synth.actors import BodyShape
+from surveil.synth.scenario import load_scenario
 from surveil.synth.scene import synthesise
+from surveil.synth.timeline import compile_scenario
 
 
 @pytest.fixture(scope="module")
@@ -49,6 +52,67 @@ def test_empty_room_lead_in_has_no_people(gt):
     assert min(ev.start_ns for ev in gt.events) >= 2_000_000_000
     # the empty frames are still frames of the ground truth (scored: no target expected)
     np.testing.assert_array_equal(gt.frames, np.arange(gt.meta["n_frames"]))
+
+
+def _joints(gt, pid: str, side: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(F, 3) shoulder, elbow and wrist of one arm."""
+    return tuple(
+        gt.joint_positions_m[:, gt.joint_labels.index(f"{pid}/{side}_{joint}")]
+        for joint in ("shoulder", "elbow", "wrist")
+    )
+
+
+def test_arm_joints_have_the_body_s_lengths_and_reach_the_hands(gt):
+    lead = gt.t_ns < 2_000_000_000
+    assert gt.joint_positions_m.shape == (len(gt.frames), 12, 3)
+    assert np.isnan(gt.joint_positions_m[lead]).all()
+    assert np.isfinite(gt.joint_positions_m[~lead]).all()
+    for person in gt.meta["persons"]:
+        pid = person["id"]
+        shape = BodyShape.from_height(person["height_m"])
+        for side in ("left", "right"):
+            shoulder, elbow, wrist = (a[~lead] for a in _joints(gt, pid, side))
+            hand = gt.positions_m[~lead, gt.labels.index(f"{pid}/{side}_hand")]
+            np.testing.assert_allclose(
+                np.linalg.norm(elbow - shoulder, axis=1), shape.upper_arm_m, atol=1e-3
+            )
+            np.testing.assert_allclose(
+                np.linalg.norm(wrist - elbow, axis=1), shape.forearm_m, atol=1e-3
+            )
+            # the wrist lies on the line from the elbow to the hand centre, half a hand short
+            np.testing.assert_allclose(
+                np.linalg.norm(hand - wrist, axis=1), 0.5 * shape.hand_length_m, atol=1e-3
+            )
+            np.testing.assert_allclose(
+                np.linalg.norm(hand - elbow, axis=1),
+                shape.forearm_m + 0.5 * shape.hand_length_m,
+                atol=1e-3,
+            )
+
+
+def test_facing_is_the_actor_s_yaw_and_the_shoulders_agree(small_scenario, gt):
+    lead = gt.t_ns < 2_000_000_000
+    assert gt.persons == ("p1", "p2") and gt.facing_yaw_rad.shape == (len(gt.frames), 2)
+    assert np.isnan(gt.facing_yaw_rad[lead]).all()
+    assert np.isfinite(gt.facing_yaw_rad[~lead]).all()
+    scenario = load_scenario(small_scenario)
+    # the choreography's generator: the first of the seed's five streams (scene._render)
+    rng_chor = np.random.default_rng(np.random.SeedSequence(scenario.scene.seed).spawn(5)[0])
+    chor = compile_scenario(scenario, rng_chor)
+    t_s = gt.t_ns[~lead] / 1e9 - 2.0  # choreography time starts after the lead-in
+    for p, pid in enumerate(gt.persons):
+        true = np.array([chor.actors[pid].yaw_at(t) for t in t_s])
+        diff = np.angle(np.exp(1j * (gt.facing_yaw_rad[~lead, p] - true)))
+        assert np.abs(diff).max() < 1e-4
+        # the body's left axis, from the right shoulder to the left, is the facing + 90 deg
+        left_sh, right_sh = (_joints(gt, pid, side)[0][~lead] for side in ("left", "right"))
+        across = left_sh - right_sh
+        from_shoulders = np.arctan2(across[:, 1], across[:, 0]) - np.pi / 2
+        diff = np.angle(np.exp(1j * (gt.facing_yaw_rad[~lead, p] - from_shoulders)))
+        assert np.abs(diff).max() < 1e-3
+    # the scenario's facing_deg: p1 faces +X, p2 faces -X at the start
+    first = gt.facing_yaw_rad[~lead][0]
+    assert np.abs(np.angle(np.exp(1j * (first - np.radians([0.0, 180.0]))))).max() < 0.02
 
 
 def test_rendered_skin_pixels_look_like_skin(small_recording, gt):
@@ -99,7 +163,7 @@ def test_same_seed_gives_identical_ground_truth_and_reuses_up_to_date_output(
 ):
     out = tmp_path / "again"
     synthesise(small_scenario, out)
-    for name in ("limbs.csv", "objects.csv", "events.json"):
+    for name in ("limbs.csv", "joints.csv", "facing.csv", "objects.csv", "events.json"):
         assert (out / "ground_truth" / name).read_bytes() == (
             small_recording / "ground_truth" / name
         ).read_bytes()
