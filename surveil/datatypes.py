@@ -498,6 +498,32 @@ class CarryEstimate:
 
 
 @dataclass(frozen=True, slots=True)
+class ArmPose:
+    """One person's arms at one instant, from the arm model (docs/armpose.md).
+
+    person : person number N of the head's label ``pN``
+    facing_rad : body facing phi (0 = +X, counter-clockwise)
+    facing_belief : the facing HMM's probability of its most likely level
+    shoulders_m, elbows_m, hands_m : (2, 3) float64 -- left arm, right arm; world, metres
+    n_views : cameras that took part
+    """
+
+    t_ns: int
+    person: int
+    facing_rad: float
+    facing_belief: float
+    shoulders_m: np.ndarray
+    elbows_m: np.ndarray
+    hands_m: np.ndarray
+    n_views: int
+
+    def __post_init__(self) -> None:
+        for name in ("shoulders_m", "elbows_m", "hands_m"):
+            require_shape(name, getattr(self, name), (2, 3), np.floating)
+            readonly(getattr(self, name))
+
+
+@dataclass(frozen=True, slots=True)
 class FrameResult:
     """Everything the output sinks (MCAP, Rerun) need for one processed frame set.
 
@@ -507,6 +533,7 @@ class FrameResult:
     track : tracker output (targets, transitions, optional particles)
     carry : per hand tracker id, what it carries (only hands the carry stage analysed)
     events : activities decided in this step (their climax may lie earlier)
+    arms : the arm trackers' poses (empty when they are off)
     timings_ms : stage name -> milliseconds spent on this frame set
     """
 
@@ -516,4 +543,5 @@ class FrameResult:
     track: TrackFrame
     carry: Mapping[int, CarryEstimate] = field(default_factory=dict)
     events: tuple[ActivityEvent, ...] = ()
+    arms: tuple[ArmPose, ...] = ()
     timings_ms: Mapping[str, float] = field(default_factory=dict)

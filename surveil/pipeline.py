@@ -22,6 +22,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from surveil.activity import ActivityEngine, RuleSet
+from surveil.armpose import ArmPoseConfig, ArmTracker
 from surveil.blobs.background import BackgroundModel, learning_frames_after
 from surveil.blobs.extract import blob_margin_px, extract_blobs
 from surveil.blobs.settings import BackgroundConfig, BlobConfig
@@ -65,6 +66,7 @@ class PipelineConfig:
     candidates: CandidateConfig = setting(default_factory=CandidateConfig, doc="3D candidates")
     tracking: TrackingConfig = setting(default_factory=TrackingConfig, doc="particle filters")
     carry: CarryConfig = setting(default_factory=CarryConfig, doc="carried objects")
+    arms: ArmPoseConfig = setting(default_factory=ArmPoseConfig, doc="arm trackers")
 
 
 def load_pipeline_config(path: Path | None) -> PipelineConfig:
@@ -139,6 +141,7 @@ class Pipeline:
         self.tracker = MultiTargetTracker(cfg.tracking, rig, seed=cfg.seed)
         self.carry = CarryAnalyser(cfg.carry, rig)
         self.activity = ActivityEngine(rules)
+        self.arms = ArmTracker(cfg.arms, rig, seed=cfg.seed)
         self._n_heads = 0
         self._n_framesets = 0  # frame sets stepped since the start (or reset)
         # the previous frame set's heads and hands of people: the background model does not
@@ -160,6 +163,7 @@ class Pipeline:
         self.tracker.reset()
         self.carry.reset()
         self.activity.reset()
+        self.arms.reset()
         self._n_heads = 0
         self._n_framesets = 0
         self._people_m = np.zeros((0, 3))
@@ -250,13 +254,23 @@ class Pipeline:
         for hand_id in self.activity.released_hands:
             self.carry.restart(hand_id)
         t4 = time.perf_counter()
+        arms = (
+            self.arms.step(fs.t_ns, track.targets, observations)
+            if self.cfg.arms.enabled and not learning
+            else ()
+        )
+        t5 = time.perf_counter()
         timings.update(
             candidates=1000 * (t1 - t0),
             tracking=1000 * (t2 - t1),
             carry=1000 * (t3 - t2),
             activity=1000 * (t4 - t3),
         )
-        return FrameResult(fs, observations, candidates, track, carry, events, timings)
+        if self.cfg.arms.enabled:
+            timings["arms"] = 1000 * (t5 - t4)
+        return FrameResult(
+            fs, observations, candidates, track, carry, events, arms=arms, timings_ms=timings
+        )
 
     def finish(self) -> list[ActivityEvent]:
         """Decide the activities still pending at the end of the stream."""

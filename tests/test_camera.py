@@ -168,3 +168,16 @@ def test_camera_arrays_are_read_only_copies():
     assert cam.K[0, 0] == 500.0
     with pytest.raises(ValueError, match="read-only"):
         cam.t[0] = 1.0
+
+
+def test_project_many_agrees_with_opencv_for_any_leading_shape(rng):
+    from surveil.rigs import lab4_rig
+
+    pts = rng.uniform([0.0, 0.0, 0.0], [6.0, 5.0, 2.0], (7, 50, 3))
+    for cam in lab4_rig():
+        px, depth = cam.project_many(pts)
+        ref_px, ref_depth = cam.project(pts.reshape(-1, 3))
+        front = ref_depth > 0.2
+        assert px.shape == (7, 50, 2) and depth.shape == (7, 50)
+        assert np.allclose(px.reshape(-1, 2)[front], ref_px[front], atol=1e-6)
+        assert np.allclose(depth.reshape(-1), ref_depth)
