@@ -177,8 +177,13 @@ class ArmTracker:
             [shoulders_m(head_m[i], phi, shapes[i]) for i in range(n_p)]
         )  # (P, K, 2, 3)
         angles = self._motion_draws(prev)
+        rays = [
+            self.rig[name].backproject(obs.blobs.centroids_px)
+            for name, obs in observations.items()
+            if len(obs.blobs)
+        ]
         hypotheses = [
-            self._hand_hypotheses(head_m[i], shapes[i], hands[i], observations) for i in range(n_p)
+            self._hand_hypotheses(head_m[i], shapes[i], hands[i], rays) for i in range(n_p)
         ]
         n_ik = self._ik_draws(angles, shoulders, shapes, hypotheses)
         log_correction = self._log_prior_over_proposal(angles, prev, n_ik)
@@ -254,37 +259,33 @@ class ArmTracker:
         head_m: np.ndarray,
         shape: ArmShape,
         tracked_hands: np.ndarray,
-        observations: Mapping[str, CameraObservation],
+        rays: Sequence[tuple[np.ndarray, np.ndarray]],
     ) -> list[np.ndarray]:
-        """Per arm, (H, 3, 3) segments [start, end, unused] in which its hand may lie: the
-        3D tracker's hand of that side (a point) and, for every camera, the stretch of every
-        hand blob's line of sight within reach of the shoulders (paper 000's proposal from
-        skin-blob hand candidates)."""
+        """Per arm, (H, 2, 3) segments (start, end) in which its hand may lie: the 3D
+        tracker's hand of that side (a point) and, for every camera, the stretch of every
+        hand blob's line of sight (``rays``: per camera its centre and the blobs' unit
+        directions) within reach of the shoulders (paper 000's proposal from skin-blob hand
+        candidates)."""
         centre = head_m - np.array([0.0, 0.0, shape.shoulder_drop_m])
         radius = shape.reach_m + shape.shoulder_half_width_m
-        rays = []
-        for name, obs in observations.items():
-            blobs = obs.blobs.centroids_px
-            if not len(blobs):
-                continue
-            cam = self.rig[name]
-            origin, dirs = cam.backproject(blobs)
+        chords = [np.zeros((0, 2, 3))]
+        for origin, dirs in rays:
             # |o + t d - c| = radius: the chord of each line of sight in the reach sphere
             oc = origin - centre
             b = dirs @ oc
-            disc = b * b - (oc @ oc - radius * radius)
-            ok = disc > 0
-            root = np.sqrt(np.maximum(disc, 0.0))
+            root = np.sqrt(np.maximum(b * b - (oc @ oc - radius * radius), 0.0))
             t0, t1 = np.maximum(-b - root, 0.05), -b + root
-            ok &= t1 > t0
-            for t_a, t_b, d in zip(t0[ok], t1[ok], dirs[ok], strict=True):
-                rays.append((origin + t_a * d, origin + t_b * d))
+            ok = t1 > t0
+            ends = origin + np.stack([t0[ok], t1[ok]], axis=1)[..., None] * dirs[ok, None, :]
+            chords.append(ends)
+        segments = np.concatenate(chords)
         out = []
         for arm in range(2):
-            segs = list(rays)
             if np.isfinite(tracked_hands[arm]).all():
-                segs.append((tracked_hands[arm], tracked_hands[arm]))
-            out.append(np.array(segs, dtype=np.float64).reshape(-1, 2, 3))
+                point = np.broadcast_to(tracked_hands[arm], (1, 2, 3))
+                out.append(np.concatenate([segments, point]))
+            else:
+                out.append(segments)
         return out
 
     def _ik_draws(
@@ -425,7 +426,7 @@ class ArmTracker:
             else:
                 p1 = np.full(hand_px.shape[:-1], cfg.p1_floor)
             along_px, along_depth = cam.project_many(along[sel])
-            inside = _lookup(dist_out, along_px, along_depth) <= cfg.inside_tol_px
+            inside = _lookup(dist_out, along_px) <= cfg.inside_tol_px
             valid = _in_image(along_px, along_depth, w_img, h)
             n_valid = valid.sum(axis=-1)
             share = np.where(
@@ -434,7 +435,7 @@ class ArmTracker:
             p2 = np.maximum(share, cfg.p2_floor)
             log_w[sel] += np.log(p1) + np.log(p2)
             sh_px, sh_depth = cam.project_many(shoulders[sel])  # (P', K, 2, 2)
-            d_out = _lookup(dist_out, sh_px, sh_depth)
+            d_out = _lookup(dist_out, sh_px)
             d_out = np.where(_in_image(sh_px, sh_depth, w_img, h), d_out, 0.0)
             log_s[sel] += -0.5 * np.sum((d_out / cfg.shoulder_sigma_px) ** 2, axis=-1)
         return log_w, log_s, n_views
@@ -455,7 +456,7 @@ def _in_image(px: np.ndarray, depth: np.ndarray, width: int, height: int) -> np.
     )
 
 
-def _lookup(image: np.ndarray, px: np.ndarray, depth: np.ndarray) -> np.ndarray:
+def _lookup(image: np.ndarray, px: np.ndarray) -> np.ndarray:
     """Nearest-pixel values of ``image`` at ``px`` (..., 2), clipped to the frame."""
     h, w = image.shape
     u = np.clip(np.rint(px[..., 0]), 0, w - 1).astype(np.intp)
