@@ -30,7 +30,6 @@ from pathlib import Path
 import numpy as np
 
 from surveil.activity import load_rules
-from surveil.armpose import ArmPoseConfig
 from surveil.datatypes import Limb, Phase
 from surveil.io.ground_truth import load_ground_truth
 from surveil.io.recording import open_recording
@@ -61,9 +60,7 @@ def bench(name: str, out_dir: Path, seed: int, config: Path | None, max_frames: 
         )
     rec = open_recording(rec_dir)
     cfg = load_pipeline_config(config)
-    cfg = dataclasses.replace(
-        cfg, seed=seed, arms=dataclasses.replace(cfg.arms or ArmPoseConfig(), enabled=True)
-    )
+    cfg = dataclasses.replace(cfg, seed=seed, arms=dataclasses.replace(cfg.arms, enabled=True))
     pipeline = Pipeline.for_recording(rec, cfg, load_rules())
     frame_of = {int(f): i for i, f in enumerate(gt.frames)}
     persons = sorted({lab.split("/")[0] for lab in gt.labels})

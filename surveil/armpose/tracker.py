@@ -47,6 +47,8 @@ from surveil.tracking import sir
 
 NS = 1_000_000_000
 HAND_LIMBS = (Limb.LEFT_HAND, Limb.RIGHT_HAND)
+# floor of the pull towards a tracked hand: a 3D hand on the wrong blob cannot veto an arm
+PULL_FLOOR = 0.01
 
 
 @dataclass(slots=True)
@@ -204,7 +206,7 @@ class ArmTracker:
         log_w = log_w + log_correction + self._log_side_prior(hand_pts, head_m, phi)
         if cfg.hand_sigma_m > 0:
             d2 = np.sum((hand_pts - hands[:, None, :, None, :]) ** 2, axis=-1)
-            pull = np.log(np.exp(-0.5 * np.nan_to_num(d2) / cfg.hand_sigma_m**2) + 0.01)
+            pull = np.log(np.exp(-0.5 * np.nan_to_num(d2) / cfg.hand_sigma_m**2) + PULL_FLOOR)
             log_w = log_w + np.where(np.isnan(d2), 0.0, pull)
 
         # weights, HMM update (eq. 12-13)
