@@ -23,6 +23,7 @@ import numpy as np
 
 from surveil.activity import ActivityEngine, RuleSet
 from surveil.armpose import ArmPoseConfig, ArmTracker
+from surveil.armpose.feed import with_arm_hands
 from surveil.blobs.background import BackgroundModel, learning_frames_after
 from surveil.blobs.extract import blob_margin_px, extract_blobs
 from surveil.blobs.settings import BackgroundConfig, BlobConfig
@@ -32,6 +33,7 @@ from surveil.carry import CarryAnalyser, CarryConfig
 from surveil.config import from_table, read_toml, setting
 from surveil.datatypes import (
     ActivityEvent,
+    ArmPose,
     CameraObservation,
     FrameResult,
     FrameSet,
@@ -232,6 +234,15 @@ class Pipeline:
         observations = self._observe(fs, timings)
         self._n_framesets += 1
         learning = any(bg.learning for bg in self.backgrounds.values())
+        arms_on = self.cfg.arms.enabled and not learning
+        feed = arms_on and self.cfg.arms.feed_candidates
+        t0 = time.perf_counter()
+        arms: tuple[ArmPose, ...] = ()
+        if feed:
+            # the arms go first, on the trackers predicted to this frame set, so that their
+            # hands can be candidates of this frame set's step
+            arms = self.arms.step(fs.t_ns, self.tracker.predicted_targets(fs.t_ns), observations)
+        t_arms = time.perf_counter() - t0
         t0 = time.perf_counter()
         candidates = make_candidates(
             list(observations.values()),
@@ -239,6 +250,15 @@ class Pipeline:
             self.cfg.candidates,
             expected_m=self.tracker.expected_hands(fs.t_ns),
         )
+        if feed:
+            candidates = with_arm_hands(
+                candidates,
+                arms,
+                observations,
+                self.rig,
+                self.cfg.arms,
+                self.cfg.candidates.support_radius_px,
+            )
         t1 = time.perf_counter()
         track = self.tracker.step(fs.t_ns, candidates, observations)
         t2 = time.perf_counter()
@@ -254,12 +274,9 @@ class Pipeline:
         for hand_id in self.activity.released_hands:
             self.carry.restart(hand_id)
         t4 = time.perf_counter()
-        arms = (
-            self.arms.step(fs.t_ns, track.targets, observations)
-            if self.cfg.arms.enabled and not learning
-            else ()
-        )
-        t5 = time.perf_counter()
+        if arms_on and not feed:
+            arms = self.arms.step(fs.t_ns, track.targets, observations)
+        t_arms += time.perf_counter() - t4
         timings.update(
             candidates=1000 * (t1 - t0),
             tracking=1000 * (t2 - t1),
@@ -267,7 +284,7 @@ class Pipeline:
             activity=1000 * (t4 - t3),
         )
         if self.cfg.arms.enabled:
-            timings["arms"] = 1000 * (t5 - t4)
+            timings["arms"] = 1000 * t_arms
         return FrameResult(
             fs, observations, candidates, track, carry, events, arms=arms, timings_ms=timings
         )

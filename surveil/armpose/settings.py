@@ -87,3 +87,23 @@ class ArmPoseConfig:
     retire_after_s: float = setting(
         1.0, "a person's arm trackers end when the head has been gone this long, s", min=0.0
     )
+    # --- feeding the 3D tracker (not in the papers; docs/armpose.md) ---
+    feed_candidates: bool = setting(
+        False,
+        "add the arm model's hands as 3D candidates where no two views give one (needs enabled)",
+    )
+    feed_prior: float = setting(
+        0.4, "prior p(Z) of an arm model's hand candidate", min=0.0, max=1.0
+    )
+    feed_radius_m: float = setting(
+        0.15,
+        "an arm model's hand within this of a two-view candidate adds nothing (that "
+        "candidate is the better estimate), m",
+        min=0.0,
+    )
+    feed_min_views: int = setting(
+        1,
+        "an arm model's hand is added only when it lies on a blob that no candidate "
+        "explains in at least this many views",
+        min=1,
+    )

@@ -47,8 +47,19 @@ from surveil.tracking import sir
 
 NS = 1_000_000_000
 HAND_LIMBS = (Limb.LEFT_HAND, Limb.RIGHT_HAND)
-# floor of the pull towards a tracked hand: a 3D hand on the wrong blob cannot veto an arm
+# floor of the pull towards a tracked hand (and of the push from the other side's): a 3D
+# hand on the wrong blob cannot veto an arm
 PULL_FLOOR = 0.01
+
+
+@dataclass(frozen=True, slots=True)
+class _View:
+    """A camera that sees at least one person's head, with its hand blobs."""
+
+    camera: str
+    observation: CameraObservation
+    sees: np.ndarray  # (P,) bool: the person's head is in view
+    blobs: np.ndarray  # (B, 2) hand blob points, px
 
 
 @dataclass(slots=True)
@@ -164,6 +175,8 @@ class ArmTracker:
         pids = [pid for pid, _ in active]
         head_m = np.stack([heads[pid] for pid in pids])  # (P, 3)
         shapes = [ArmShape.from_head_height(float(np.median(p.head_z_m))) for _, p in active]
+        # the 3D tracker's hands in the normal state, in label order; which arm each belongs
+        # to is decided per facing level below, not by the label
         hands = np.full((len(pids), 2, 3), np.nan)
         for t in targets:
             if t.limb in HAND_LIMBS and t.person in heads and t.phase is Phase.NORMAL:
@@ -179,13 +192,16 @@ class ArmTracker:
             [shoulders_m(head_m[i], phi, shapes[i]) for i in range(n_p)]
         )  # (P, K, 2, 3)
         angles = self._motion_draws(prev)
+        sided = hands_by_side(hands, head_m, phi)  # (P, K, 2, 3)
+        likely = belief.argmax(axis=1)
         rays = [
             self.rig[name].backproject(obs.blobs.centroids_px)
             for name, obs in observations.items()
             if len(obs.blobs)
         ]
         hypotheses = [
-            self._hand_hypotheses(head_m[i], shapes[i], hands[i], rays) for i in range(n_p)
+            self._hand_hypotheses(head_m[i], shapes[i], sided[i, likely[i]], rays)
+            for i in range(n_p)
         ]
         n_ik = self._ik_draws(angles, shoulders, shapes, hypotheses)
         log_correction = self._log_prior_over_proposal(angles, prev, n_ik)
@@ -200,14 +216,12 @@ class ArmTracker:
         elbows = sh + upper[..., None] * u
         hand_pts = elbows + fore[..., None] * f  # (P, K, 2, N, 3)
 
-        log_w, log_s, n_views = self._log_likelihood(
-            head_m, shoulders, sh, elbows, hand_pts, observations
-        )
+        views = self._views(head_m, observations)
+        log_w, log_s = self._log_likelihood(views, shoulders, sh, elbows, hand_pts)
+        n_views = sum((v.sees.astype(np.int64) for v in views), np.zeros(n_p, np.int64))
         log_w = log_w + log_correction + self._log_side_prior(hand_pts, head_m, phi)
         if cfg.hand_sigma_m > 0:
-            d2 = np.sum((hand_pts - hands[:, None, :, None, :]) ** 2, axis=-1)
-            pull = np.log(np.exp(-0.5 * np.nan_to_num(d2) / cfg.hand_sigma_m**2) + PULL_FLOOR)
-            log_w = log_w + np.where(np.isnan(d2), 0.0, pull)
+            log_w = log_w + _log_pull_push(hand_pts, sided, cfg.hand_sigma_m)
 
         # weights, HMM update (eq. 12-13)
         shift = log_w.max(axis=(1, 2, 3), keepdims=True)
@@ -370,30 +384,13 @@ class ArmTracker:
         past = np.maximum(-lateral, 0.0) / self.cfg.midline_sigma_m
         return -0.5 * past * past
 
-    def _log_likelihood(
-        self,
-        head_m: np.ndarray,
-        shoulders: np.ndarray,
-        sh: np.ndarray,
-        elbows: np.ndarray,
-        hand_pts: np.ndarray,
-        observations: Mapping[str, CameraObservation],
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """log p1 p2 per particle (P, K, 2, N), log s per level (P, K), views per person."""
+    def _views(
+        self, head_m: np.ndarray, observations: Mapping[str, CameraObservation]
+    ) -> list[_View]:
+        """The cameras that see at least one person's head (within ``max_distance_m``),
+        each with its hand blobs: every blob point not at a tracked head's projection."""
         cfg = self.cfg
-        n_p = len(head_m)
-        log_w = np.zeros(hand_pts.shape[:-1])
-        log_s = np.zeros(shoulders.shape[:2])
-        n_views = np.zeros(n_p, np.int64)
-        t = (np.arange(cfg.arm_samples) + 0.5) / cfg.arm_samples
-        # points along the upper arm and the forearm: (P, K, 2, N, 2S, 3)
-        along = np.concatenate(
-            [
-                sh[..., None, :] + t[:, None] * (elbows - sh)[..., None, :],
-                elbows[..., None, :] + t[:, None] * (hand_pts - elbows)[..., None, :],
-            ],
-            axis=-2,
-        )
+        out = []
         for name, obs in observations.items():
             cam = self.rig[name]
             head_px, head_depth = cam.project_many(head_m)
@@ -409,9 +406,6 @@ class ArmTracker:
             )
             if not sees.any():
                 continue
-            n_views += sees
-            dist_out = obs.silhouettes.dist_outside_px
-            # hand blobs: every blob point not at a tracked head's projection
             blobs = obs.blobs.centroids_px
             if len(blobs):
                 head_r_px = cam.K[0, 0] * cfg.head_blob_m / np.maximum(head_depth, 0.1)
@@ -420,10 +414,38 @@ class ArmTracker:
                     < head_r_px[None, :]
                 ) & (head_depth[None, :] > 0.1)
                 blobs = blobs[~near_head.any(axis=1)]
-            sel = np.flatnonzero(sees)
+            out.append(_View(name, obs, sees, blobs))
+        return out
+
+    def _log_likelihood(
+        self,
+        views: Sequence[_View],
+        shoulders: np.ndarray,
+        sh: np.ndarray,
+        elbows: np.ndarray,
+        hand_pts: np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """log p1 p2 per particle (P, K, 2, N) and log s per level (P, K)."""
+        cfg = self.cfg
+        log_w = np.zeros(hand_pts.shape[:-1])
+        log_s = np.zeros(shoulders.shape[:2])
+        t = (np.arange(cfg.arm_samples) + 0.5) / cfg.arm_samples
+        # points along the upper arm and the forearm: (P, K, 2, N, 2S, 3)
+        along = np.concatenate(
+            [
+                sh[..., None, :] + t[:, None] * (elbows - sh)[..., None, :],
+                elbows[..., None, :] + t[:, None] * (hand_pts - elbows)[..., None, :],
+            ],
+            axis=-2,
+        )
+        for v in views:
+            cam = self.rig[v.camera]
+            h, w_img = v.observation.silhouettes.labels.shape
+            dist_out = v.observation.silhouettes.dist_outside_px
+            sel = np.flatnonzero(v.sees)
             hand_px, hand_depth = cam.project_many(hand_pts[sel])
-            if len(blobs):
-                d2 = np.min(np.sum((hand_px[..., None, :] - blobs) ** 2, axis=-1), axis=-1)
+            if len(v.blobs):
+                d2 = np.min(np.sum((hand_px[..., None, :] - v.blobs) ** 2, axis=-1), axis=-1)
                 p1 = np.maximum(1.0 / (1.0 + cfg.alpha_px2 * d2), cfg.p1_floor)
             else:
                 p1 = np.full(hand_px.shape[:-1], cfg.p1_floor)
@@ -440,7 +462,65 @@ class ArmTracker:
             d_out = _lookup(dist_out, sh_px)
             d_out = np.where(_in_image(sh_px, sh_depth, w_img, h), d_out, 0.0)
             log_s[sel] += -0.5 * np.sum((d_out / cfg.shoulder_sigma_px) ** 2, axis=-1)
-        return log_w, log_s, n_views
+        return log_w, log_s
+
+
+def hands_by_side(tracked: np.ndarray, head_m: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """(P, K, 2, 3) the tracked hands ``tracked`` (P, 2, 3, any order, NaN rows for none)
+    given to the arms (left, right) at every facing level ``phi`` (K,): of two hands the one
+    farther to the body's left (from the head ``head_m`` (P, 3)) goes to the left arm; a lone
+    hand goes to the arm of its side. The 3D tracker's own left/right labels are not used:
+    they come from its weaker facing cues, and an arm pulled to a hand of the wrong label
+    would follow the mislabel.
+
+    >>> tracked = np.array([[[1.0, -0.2, 1.0], [np.nan] * 3]])  # one hand, to the right
+    >>> out = hands_by_side(tracked, np.zeros((1, 3)), np.array([0.0, np.pi]))
+    >>> np.isnan(out[0, :, :, 0]).tolist()  # facing +X: the right arm's; facing -X: left's
+    [[True, False], [False, True]]
+    """
+    left_axis = np.stack([-np.sin(phi), np.cos(phi)], axis=-1)  # (K, 2)
+    lateral = np.einsum("phc,kc->pkh", tracked[..., :2] - head_m[:, None, :2], left_axis)
+    has0, has1 = np.isfinite(lateral[..., 0]), np.isfinite(lateral[..., 1])  # (P, K)
+    # of two hands the first is the left one when it is farther left; a lone hand by its sign
+    first_left = np.where(
+        has1, lateral[..., 0] >= np.nan_to_num(lateral[..., 1], nan=0.0), lateral[..., 0] >= 0
+    )
+    second_left = np.where(has0, ~first_left, lateral[..., 1] >= 0)
+    h0, h1 = tracked[:, None, 0, :], tracked[:, None, 1, :]  # (P, 1, 3)
+    nan = np.full_like(h0, np.nan)
+
+    def pick(take0: np.ndarray, take1: np.ndarray) -> np.ndarray:
+        return np.where(take0[..., None], h0, np.where(take1[..., None], h1, nan))
+
+    left = pick(has0 & first_left, has1 & second_left)
+    right = pick(has0 & ~first_left, has1 & ~second_left)
+    return np.stack([left, right], axis=2)
+
+
+def _log_pull_push(hand_pts: np.ndarray, sided: np.ndarray, sigma_m: float) -> np.ndarray:
+    """log weight (P, K, 2, N) from the 3D tracker's hands given to the arms ``sided``
+    (P, K, 2, 3; NaN where an arm has none, :func:`hands_by_side`): a pull towards the hand
+    of the arm's own side and a push away from the other side's (a dip to ``PULL_FLOOR`` at
+    it). Without the push both arms settle on the same blob when one hand is hard to see;
+    hands that meet are combined in the 3D tracker, not normal, so the push does not keep
+    them apart.
+
+    >>> pts = np.zeros((1, 1, 2, 1, 3))
+    >>> sided = np.array([[[[0.0, 0, 0], [np.nan, np.nan, np.nan]]]])
+    >>> w = _log_pull_push(pts, sided, 0.1)[0, 0, :, 0]
+    >>> bool(w[0] > 0 > w[1])
+    True
+    """
+
+    def closeness(ref: np.ndarray) -> np.ndarray:
+        d2 = np.sum((hand_pts - ref[:, :, :, None, :]) ** 2, axis=-1)
+        return np.exp(-0.5 * np.nan_to_num(d2, nan=np.inf) / sigma_m**2)
+
+    own = np.isfinite(sided[..., 0])[..., None]  # (P, K, 2, 1)
+    other = own[:, :, ::-1]
+    pull = np.where(own, np.log(closeness(sided) + PULL_FLOOR), 0.0)
+    push = np.where(other, np.log1p(-(1 - PULL_FLOOR) * closeness(sided[:, :, ::-1])), 0.0)
+    return pull + push
 
 
 def _logmeanexp(x: np.ndarray, axis: int) -> np.ndarray:

@@ -9,7 +9,7 @@ are dropped and close ones merged. See docs/candidates.md.
 from __future__ import annotations
 
 import logging
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -144,17 +144,18 @@ def _merge(
     return order[np.array(kept, dtype=np.intp)], np.array(kept_prior)
 
 
-def _view_support(
+def view_support(
     points_m: np.ndarray,
-    cam_pairs: np.ndarray,
-    blob_pairs: np.ndarray,
+    cam_pairs: np.ndarray | None,
+    blob_pairs: np.ndarray | None,
     rig: Rig,
-    by_cam: dict[int, CameraObservation],
+    by_cam: Mapping[int, CameraObservation],
     radius_px: float,
 ) -> np.ndarray:
-    """(K, M) int: per candidate and rig camera, the blob whose centroid is nearest to the
-    candidate's projection if within ``radius_px`` (-1: none, or the camera did not see it).
-    The candidate's own two blobs always support it."""
+    """(K, M) int: per point and rig camera, the blob whose centroid is nearest to the
+    point's projection if within ``radius_px`` (-1: none, or the camera did not see it).
+    A candidate's own two blobs (``cam_pairs``, ``blob_pairs``; rows of -1 for points no
+    camera pair made) always support it."""
     k = len(points_m)
     support = np.full((k, len(rig.cameras)), -1, dtype=np.int64)
     for m, obs in by_cam.items():
@@ -166,9 +167,10 @@ def _view_support(
         nearest = dist.argmin(axis=1)
         ok = inside & (dist[np.arange(k), nearest] <= radius_px)
         support[ok, m] = nearest[ok]
-    rows = np.arange(k)
-    support[rows, cam_pairs[:, 0]] = blob_pairs[:, 0]
-    support[rows, cam_pairs[:, 1]] = blob_pairs[:, 1]
+    if cam_pairs is not None and blob_pairs is not None:
+        rows = np.flatnonzero(cam_pairs[:, 0] >= 0)
+        for col in (0, 1):
+            support[rows, cam_pairs[rows, col]] = blob_pairs[rows, col]
     return support
 
 
@@ -396,7 +398,7 @@ def make_candidates(
     cam_pairs = np.column_stack([cam_all[ia], cam_all[ib]])
     blob_pairs = np.column_stack([blob_all[ia], blob_all[ib]])
     if cfg.explain_away:
-        support = _view_support(points, cam_pairs, blob_pairs, rig, by_cam, cfg.support_radius_px)
+        support = view_support(points, cam_pairs, blob_pairs, rig, by_cam, cfg.support_radius_px)
         real = explain_away(support, prior)
         if expected_m is not None:
             real = rescue_expected(

@@ -1510,19 +1510,7 @@ class MultiTargetTracker:
         targets = []
         blocks, owners = [], []
         for idx, (tid, tr) in enumerate(self._tracks.items()):
-            mean = (tr.last_good_m if tr.phase is Phase.LOST else tr.mean_m).copy()
-            if tr.limb is Limb.HEAD:
-                mean[2] += self.cfg.head_centre_rise_m
-            targets.append(
-                TargetSnapshot(
-                    target_id=tid,
-                    person=tr.person,
-                    limb=tr.limb,
-                    phase=tr.phase,
-                    mean_m=mean,
-                    cov_m2=tr.cov_m2.copy(),
-                )
-            )
+            targets.append(self._snapshot(tid, tr, 0.0))
             if tr.phase in ACTIVE:
                 blocks.append(idx)
                 owners.append(tid)
@@ -1539,7 +1527,32 @@ class MultiTargetTracker:
             particle_owner=owner,
         )
 
+    def _snapshot(self, tid: int, tr: _Track, dt_s: float) -> TargetSnapshot:
+        """Tracker ``tid`` as written out, ``dt_s`` after its estimate (constant velocity;
+        a lost tracker stays at its last good position)."""
+        if tr.phase is Phase.LOST:
+            mean = tr.last_good_m.copy()
+        else:
+            mean = tr.mean_m + tr.vel_mps * dt_s
+        if tr.limb is Limb.HEAD:
+            mean[2] += self.cfg.head_centre_rise_m
+        return TargetSnapshot(
+            target_id=tid,
+            person=tr.person,
+            limb=tr.limb,
+            phase=tr.phase,
+            mean_m=mean,
+            cov_m2=tr.cov_m2.copy(),
+        )
+
     # ------------------------------------------------------------------ introspection
+
+    def predicted_targets(self, t_ns: int) -> tuple[TargetSnapshot, ...]:
+        """The live trackers as the last step left them, predicted to time ``t_ns``
+        (constant velocity), in id order: for stages that run before this frame set's
+        step (the arm trackers, when they feed candidates)."""
+        dt_s = max(self._step_s(int(t_ns)), 0.0)
+        return tuple(self._snapshot(tid, tr, dt_s) for tid, tr in sorted(self._tracks.items()))
 
     def expected_hands(self, t_ns: int) -> np.ndarray:
         """(E, 3) where the active trackers not typed as heads are predicted to be at time

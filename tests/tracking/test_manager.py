@@ -274,6 +274,17 @@ def test_expected_hands_extrapolates_moving_targets_for_the_candidate_stage(rig,
     assert MultiTargetTracker(LONE, rig, seed=1).expected_hands(0).shape == (0, 3)
 
 
+def test_predicted_targets_are_the_last_frame_moved_on_to_the_next_time(rig, rng):
+    trk = MultiTargetTracker(LONE, rig, seed=1)
+    truth = [np.array([1.0 + i / 15, 2.0, 1.0]) for i in range(31)]  # 1 m/s along x
+    frames = run(trk, [[p] for p in truth[:30]], rng)
+    (now,) = frames[-1].targets
+    (ahead,) = trk.predicted_targets(30 * DT_NS)
+    assert (ahead.target_id, ahead.label, ahead.phase) == (now.target_id, now.label, now.phase)
+    assert np.linalg.norm(ahead.mean_m - truth[30]) < 0.03
+    assert np.allclose(trk.predicted_targets(29 * DT_NS)[0].mean_m, now.mean_m)
+
+
 def test_same_seed_same_output_and_skipped_frames(rig):
     frames = two_people_frames(30, b_from=5)
 
