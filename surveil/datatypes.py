@@ -168,8 +168,9 @@ class CandidateSet:
     prior : (K,) float64, p(Z) in [0, 1]
     half_gap_m : (K,) float64, optional -- d, half the shortest distance between the two
         lines of sight (eq. 24)
-    cam_pairs : (K, 2) int, optional -- indices (into the rig's camera order) of the two views
-    blob_pairs : (K, 2) int, optional -- blob indices in those two views
+    cam_pairs : (K, 2) int, optional -- indices (into the rig's camera order) of the two views;
+        -1 for points no camera pair made (the arm model's hands, ``surveil.armpose.feed``)
+    blob_pairs : (K, 2) int, optional -- blob indices in those two views (-1 likewise)
     """
 
     points_m: np.ndarray
