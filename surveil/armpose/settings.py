@@ -107,3 +107,7 @@ class ArmPoseConfig:
         "explains in at least this many views",
         min=1,
     )
+
+    def __post_init__(self) -> None:
+        if self.feed_candidates and not self.enabled:
+            raise ValueError("feed_candidates needs the arm trackers: set enabled = true too")

@@ -116,3 +116,16 @@ def test_fed_candidates_follow_the_camera_candidates(with_pairs):
 def test_no_poses_leave_the_candidates_as_they_are():
     base = candidates(HEAD)
     assert with_arm_hands(base, [], {}, RIG, CFG, RADIUS_PX) is base
+
+
+def test_feeding_without_the_arm_trackers_is_a_config_error(tmp_path):
+    from surveil.errors import ConfigError
+    from surveil.pipeline import load_pipeline_config
+
+    path = tmp_path / "feed.toml"
+    path.write_text("[arms]\nfeed_candidates = true\n")
+    with pytest.raises(ConfigError, match="arms: feed_candidates needs .*enabled = true"):
+        load_pipeline_config(path)
+    path.write_text("[arms]\nenabled = true\nfeed_candidates = true\nfeed_min_views = 0\n")
+    with pytest.raises(ConfigError, match="arms.feed_min_views"):
+        load_pipeline_config(path)
