@@ -257,8 +257,11 @@ class ActivityEngine:
     def finish(self) -> list[ActivityEvent]:
         """Decide the pending episodes at the end of the stream with the latest estimates.
 
-        Coincidence episodes that never separated are dropped (all Table 1 activities end in a
-        separation). Decisions made here count as timeouts for the confidence.
+        Coincidence episodes that never separated, and still moments whose hand never left
+        its point, are dropped: all Table 1 activities are decided after a separation, and a
+        stream that ends first has not shown one (a hand still at the table when the
+        recording stops may yet take the object back). Decisions made here count as timeouts
+        for the confidence.
         """
         events: list[ActivityEvent] = []
         if self._frames:
@@ -269,8 +272,11 @@ class ActivityEngine:
                     events += [ev] if ev else []
                 del self._pairs[key]
             for key, st in list(self._stills.items()):
-                ev = self._decide_still(st, cur, timed_out=True)
-                events += [ev] if ev else []
+                if st.apart_ns is not None:
+                    ev = self._decide_still(st, cur, timed_out=True)
+                    events += [ev] if ev else []
+                else:
+                    log.debug("%s: %s never left its still point", st.rule.rule_id, st.label)
                 del self._stills[key]
         self.reset()
         return self._ordered(events)

@@ -425,6 +425,24 @@ def test_finish_decides_a_pending_separation(rules):
     assert final[0].confidence == pytest.approx(0.45)
 
 
+def test_still_hand_at_the_end_of_the_stream_is_no_event(rules):
+    """The stream stops while the hand is still at its table point, after its carry estimate
+    went empty: the hand has not left, so no place is decided (demo, 16 s version, seed 2:
+    a false place at the last frame; docs/benchmarks.md, session 37)."""
+    script = reach(switch(1.35, holding(BLUE), empty()))
+    script.duration_s = 1.55  # the hand leaves at 1.6 s
+    assert run(rules, script.stream()) == []
+
+
+def test_finish_decides_a_hand_that_left_its_still_point(rules):
+    """The stream stops 0.1 s after the hand left its point (0.3 m away at about 2.1 s),
+    before the decision's delay: decided at the end, as a timeout."""
+    script = reach(switch(1.35, holding(BLUE), empty()))
+    script.duration_s = 2.2
+    ev = only(run(rules, script.stream()), "place")
+    assert ev.confidence == pytest.approx(0.45)
+
+
 def test_coincidence_without_separation_is_dropped(rules):
     script = one_person()
     script.joins[0].t_sep_s = 99.0
