@@ -259,6 +259,10 @@ class Silhouettes:
     boxes_px : (n, 4) int32 or None -- x, y, width, height of a box holding each component
         (its bounding box, or one a little larger); None when not known (then read from
         ``labels``). Skin and blobs are computed inside these boxes only (:meth:`boxes`).
+    foreground : (H, W) bool or None -- pixels the background model called foreground
+        (not shadow) before the clean-up; None when not known. The blob stage's foreground
+        share test: skin-coloured scenery inside a silhouette (a wooden table behind a hand)
+        is mostly not foreground, a hand or face mostly is.
     """
 
     labels: np.ndarray
@@ -269,6 +273,7 @@ class Silhouettes:
     background_edges: np.ndarray | None = None
     centres_px: np.ndarray | None = None
     boxes_px: np.ndarray | None = None
+    foreground: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         require_shape("labels", self.labels, (None, None), np.integer)
@@ -283,9 +288,11 @@ class Silhouettes:
             require_shape("centres_px", self.centres_px, (n, 2), np.floating)
             readonly(self.centres_px)
         readonly(self.labels, self.top_v_px, self.bottom_v_px, self.dist_outside_px)
-        if self.changed is not None:
-            require_shape("changed", self.changed, self.labels.shape, np.bool_)
-            readonly(self.changed)
+        for name in ("changed", "foreground"):
+            mask = getattr(self, name)
+            if mask is not None:
+                require_shape(name, mask, self.labels.shape, np.bool_)
+                readonly(mask)
         if self.background_edges is not None:
             require_shape("background_edges", self.background_edges, self.labels.shape, np.float32)
             readonly(self.background_edges)
@@ -364,6 +371,7 @@ class Silhouettes:
             else np.column_stack([self.boxes_px[:, :2] - shift, self.boxes_px[:, 2:]]).astype(
                 np.int32
             ),
+            cut(self.foreground),
         )
 
 

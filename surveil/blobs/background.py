@@ -275,6 +275,7 @@ class BackgroundModel:
         changed: bool = False,
         background_edges: bool = False,
         people_px: np.ndarray | None = None,
+        foreground: bool = False,
     ) -> Silhouettes:
         """Update the model with one frame and return its person silhouettes.
 
@@ -283,6 +284,9 @@ class BackgroundModel:
         bgr : (H, W, 3) uint8 BGR, H and W as given at construction.
         changed : also return ``Silhouettes.changed`` (what MOG2 found unlike the background
             before the clean-up; the blob stage asks for it when ``change_dilate_px`` >= 0)
+        foreground : also return ``Silhouettes.foreground`` (what MOG2 called foreground,
+            shadows not included, before the clean-up; the blob stage's foreground share
+            test, ``min_foreground_share``)
         background_edges : also return ``Silhouettes.background_edges``
             (:meth:`background_edges`; the blob stage's ghost test)
         people_px : (N, 2) float, optional -- where tracked people's heads and hands project
@@ -312,6 +316,7 @@ class BackgroundModel:
         changed_small = raw != 0 if changed else None
         edges = self.background_edges() if background_edges else None
         fg = (raw == FOREGROUND).view(np.uint8)
+        fg_raw = fg if foreground else None
         if self._open is not None:
             fg = cv2.morphologyEx(fg, cv2.MORPH_OPEN, self._open)
         if self._close is not None:
@@ -320,7 +325,12 @@ class BackgroundModel:
             full = silhouettes_from_mask(fg, self.cfg.min_person_area_px, self.distance_cap_px)
             if protect:
                 self._learn_around(small, full.labels, np.asarray(people_px, np.float64))
-            return dataclasses.replace(full, changed=changed_small, background_edges=edges)
+            return dataclasses.replace(
+                full,
+                changed=changed_small,
+                background_edges=edges,
+                foreground=None if fg_raw is None else fg_raw.view(bool),
+            )
         # components and distances on the small mask too (they cost more than MOG2 at full
         # size), then scaled back to frame pixels
         sx = self.shape[1] / self._small_size[0]
@@ -352,4 +362,7 @@ class BackgroundModel:
             if sil_small.centres_px is None
             else (sil_small.centres_px + 0.5) * (sx, sy) - 0.5,
             None if sil_small.boxes_px is None else _scale_boxes(sil_small.boxes_px, sx, sy),
+            None
+            if fg_raw is None
+            else cv2.resize(fg_raw, size, interpolation=cv2.INTER_NEAREST).view(bool),
         )

@@ -377,6 +377,19 @@ def extract_blobs(
     )
 
 
+def foreground_share(labels: np.ndarray, foreground: np.ndarray, n_labels: int) -> np.ndarray:
+    """(n_labels,) share of each component's pixels that are ``foreground`` (0 for an empty
+    label).
+
+    >>> lab = np.array([[1, 1, 2, 2]]); fg = np.array([[True, False, False, False]])
+    >>> foreground_share(lab, fg, 3).tolist()
+    [0.0, 0.5, 0.0]
+    """
+    area = np.bincount(labels.ravel(), minlength=n_labels)
+    hits = np.bincount(labels[foreground], minlength=n_labels)
+    return hits / np.maximum(area, 1)
+
+
 def blob_margin_px(cfg: BlobConfig, width_px: int) -> int:
     """How far from a silhouette the blob stage looks, px: its dilation, the opening, the
     ghost test's outline and Sobel stencil, plus slack. Skin beyond this never matters."""
@@ -445,6 +458,11 @@ def _extract(
                 areas = stats[1:, cv2.CC_STAT_AREA].astype(np.int64)
                 ok = np.flatnonzero(areas >= max(cfg.min_blob_area_px, 1))
         ok = ok[areas[ok] <= limit]
+    if cfg.min_foreground_share > 0 and silhouettes.foreground is not None and len(ok):
+        ok = ok[
+            foreground_share(labels, silhouettes.foreground, n_all)[ok + 1]
+            >= cfg.min_foreground_share
+        ]
     edges = silhouettes.background_edges
     if cfg.ghost_edge_ratio > 0 and edges is not None and bgr is not None and len(ok):
         ghosts = revealed_background(

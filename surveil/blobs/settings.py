@@ -139,6 +139,15 @@ class BlobConfig:
         "and wall that the closing and the dilation add to silhouettes (-1 = no such test)",
         min=-1,
     )
+    min_foreground_share: float = setting(
+        0.0,
+        "a blob is dropped when less than this share of its pixels are foreground to the "
+        "background model (shadows not counted, before the clean-up): skin-coloured scenery "
+        "that the closing took into a silhouette, such as a wooden table's edge beside a hand "
+        "(0 = no such test)",
+        min=0.0,
+        max=1.0,
+    )
     ghost_edge_ratio: float = setting(
         0.45,
         "a blob is revealed background (a ghost: skin-coloured furniture under an object just "
@@ -191,5 +200,6 @@ class BlobConfig:
         """What this stage needs from ``BackgroundModel.step`` besides the silhouettes."""
         return {
             "changed": self.change_dilate_px >= 0,
+            "foreground": self.min_foreground_share > 0,
             "background_edges": self.ghost_edge_ratio > 0,
         }

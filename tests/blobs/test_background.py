@@ -88,6 +88,21 @@ def test_changed_marks_what_differs_from_the_background_not_what_the_closing_fil
     assert not sil.changed[60, 100]
 
 
+def test_foreground_is_what_mog2_called_foreground_before_the_clean_up(rng):
+    model = BackgroundModel(BackgroundConfig(learning_frames=20, min_person_area_px=100), (H, W))
+    _, frame = _scene(rng)
+    _learn(model, frame)
+    img = frame()
+    img[30:100, 20:30] = (20, 200, 40)  # two legs 4 px apart: the closing joins them
+    img[30:100, 34:44] = (20, 200, 40)
+    assert model.step(frame()).foreground is None  # not asked for
+    sil = model.step(img, foreground=True)
+    assert sil.foreground is not None and sil.foreground.shape == (H, W)
+    assert sil.labels[60, 32] > 0 and not sil.foreground[60, 32]
+    assert sil.foreground[60, 25] and sil.foreground[60, 38]
+    assert not sil.foreground[60, 100]
+
+
 def test_background_edges_are_the_learnt_scenes_edges_refreshed_every_few_frames(rng):
     cfg = BackgroundConfig(learning_frames=20, min_person_area_px=100, edges_every_frames=5)
     model = BackgroundModel(cfg, (H, W))

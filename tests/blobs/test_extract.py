@@ -216,6 +216,26 @@ def test_skin_coloured_background_inside_the_silhouette_is_not_a_blob():
     assert grown.areas_px.sum() > kept.areas_px.sum()
 
 
+def test_a_blob_mostly_not_foreground_is_scenery_and_dropped():
+    # a wooden table's edge that the closing took into the silhouette: skin-coloured, but the
+    # background model saw no change there; a hand on the table is foreground only in part
+    # (where it is darker than the wood) and stays whole
+    sil = _one_person()
+    foreground = sil.labels > 0
+    foreground[30:40, 40:60] = False  # the table's edge
+    foreground[60:70, 30:40] = False  # the hand's half in the colour of the wood
+    foreground[60:70, 30:35] = True
+    sil = dataclasses.replace(sil, foreground=foreground)
+    skin = np.zeros((H, W), bool)
+    skin[30:40, 40:60] = True
+    skin[60:70, 30:40] = True
+    cfg = BlobConfig(min_blob_area_px=1, silhouette_dilate_px=0, max_blob_area_rel=0.0)
+    kept = extract_blobs(skin, sil, dataclasses.replace(cfg, min_foreground_share=0.2))
+    assert kept.centroids_px.tolist() == [[34.5, 64.5]] and kept.areas_px.tolist() == [100]
+    assert len(extract_blobs(skin, sil, cfg)) == 2  # 0: no such test
+    assert len(extract_blobs(skin, sil, dataclasses.replace(cfg, min_foreground_share=0.6))) == 0
+
+
 def _table_with_ghost_and_hand():
     """A skin-coloured table seen whole; an object just taken off it at rows 20-39, cols
     20-39 (a ghost: foreground, skin, its outline an edge of the background image only) and
