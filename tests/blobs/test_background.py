@@ -73,34 +73,23 @@ def test_thin_arm_held_out_stays_in_the_silhouette(rng):
     assert sil.labels[51, 60] == 1 and sil.labels[51, 72] == 1
 
 
-def test_changed_marks_what_differs_from_the_background_not_what_the_closing_filled(rng):
+@pytest.mark.parametrize("mask", ["changed", "foreground"])
+def test_raw_masks_mark_what_differs_from_the_background_not_what_the_closing_filled(rng, mask):
+    # changed: foreground or shadow; foreground: without shadows -- both before the clean-up
     model = BackgroundModel(BackgroundConfig(learning_frames=20, min_person_area_px=100), (H, W))
     _, frame = _scene(rng)
     _learn(model, frame)
+    assert getattr(model.step(frame()), mask) is None  # not asked for
     img = frame()
     img[30:100, 20:30] = (20, 200, 40)  # two legs 4 px apart: the closing joins them
     img[30:100, 34:44] = (20, 200, 40)
-    sil = model.step(img, changed=True)
-    assert sil.changed is not None and sil.changed.shape == (H, W)
+    sil = model.step(img, **{mask: True})
+    raw = getattr(sil, mask)
+    assert raw is not None and raw.shape == (H, W)
     assert sil.labels[60, 32] > 0, "the closing filled the gap"
-    assert not sil.changed[60, 32]
-    assert sil.changed[60, 25] and sil.changed[60, 38]
-    assert not sil.changed[60, 100]
-
-
-def test_foreground_is_what_mog2_called_foreground_before_the_clean_up(rng):
-    model = BackgroundModel(BackgroundConfig(learning_frames=20, min_person_area_px=100), (H, W))
-    _, frame = _scene(rng)
-    _learn(model, frame)
-    img = frame()
-    img[30:100, 20:30] = (20, 200, 40)  # two legs 4 px apart: the closing joins them
-    img[30:100, 34:44] = (20, 200, 40)
-    assert model.step(frame()).foreground is None  # not asked for
-    sil = model.step(img, foreground=True)
-    assert sil.foreground is not None and sil.foreground.shape == (H, W)
-    assert sil.labels[60, 32] > 0 and not sil.foreground[60, 32]
-    assert sil.foreground[60, 25] and sil.foreground[60, 38]
-    assert not sil.foreground[60, 100]
+    assert not raw[60, 32]
+    assert raw[60, 25] and raw[60, 38]
+    assert not raw[60, 100]
 
 
 def test_background_edges_are_the_learnt_scenes_edges_refreshed_every_few_frames(rng):
