@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 from collections.abc import Iterator
 
-from surveil.blobs.background import BackgroundModel, learning_frames_after
+from surveil.blobs.background import BackgroundModel, learning_frames_after, shadow_region
 from surveil.blobs.extract import extract_blobs
 from surveil.blobs.skin import default_skin_model
 from surveil.datatypes import CameraObservation, FrameSet
@@ -37,7 +37,10 @@ def observe_recording(
                 continue
             if cam not in models:
                 models[cam] = BackgroundModel(
-                    cfg.background, img.shape[:2], learning_frames_after(cfg.background, fs.index)
+                    cfg.background,
+                    img.shape[:2],
+                    learning_frames_after(cfg.background, fs.index),
+                    shadow_region=shadow_region(cfg.background, rec.rig, cam, img.shape[:2]),
                 )
             t0 = time.perf_counter()
             sil = models[cam].step(img, **cfg.blobs.background_requests())

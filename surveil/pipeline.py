@@ -24,7 +24,7 @@ import numpy as np
 from surveil.activity import ActivityEngine, RuleSet
 from surveil.armpose import ArmPoseConfig, ArmTracker
 from surveil.armpose.feed import with_arm_hands
-from surveil.blobs.background import BackgroundModel, learning_frames_after
+from surveil.blobs.background import BackgroundModel, learning_frames_after, shadow_region
 from surveil.blobs.extract import blob_margin_px, extract_blobs
 from surveil.blobs.settings import BackgroundConfig, BlobConfig
 from surveil.blobs.skin import SkinModel, default_skin_model
@@ -207,6 +207,7 @@ class Pipeline:
                     img.shape[:2],
                     learning_frames_after(self.cfg.background, self._n_framesets),
                     silhouette_distance_cap_px(self.cfg),
+                    shadow_region(self.cfg.background, self.rig, cam, img.shape[:2]),
                 )
             t0 = time.perf_counter()
             silhouettes = bg.step(

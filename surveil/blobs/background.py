@@ -18,6 +18,7 @@ import numpy as np
 
 from surveil.blobs.components import components_with_stats
 from surveil.blobs.settings import BackgroundConfig
+from surveil.camera import Camera, Rig
 from surveil.datatypes import Silhouettes
 from surveil.validate import require_shape
 
@@ -133,6 +134,79 @@ def _scale_boxes(boxes_px: np.ndarray, sx: float, sy: float) -> np.ndarray:
     return np.column_stack([x0, y0, x1 - x0, y1 - y0]).astype(np.int32)
 
 
+def floor_polygon_m(centres_m: np.ndarray) -> np.ndarray:
+    """(K, 2) the convex hull of the cameras' floor positions (x, y), counter-clockwise
+    (x east, y north) from its corner with the smallest (x, y); fewer than 3 corners when the
+    cameras stand in a line.
+
+    >>> floor_polygon_m(np.array([[0, 3, 2.5], [4, 0, 2.5], [4, 3, 2], [0, 0, 2], [2, 1, 2]]))
+    array([[0., 0.],
+           [4., 0.],
+           [4., 3.],
+           [0., 3.]])
+    """
+    xy = np.asarray(centres_m, dtype=np.float64)[:, :2]
+    hull = xy[cv2.convexHull(xy.astype(np.float32), returnPoints=False).ravel()]
+    if len(hull) >= 3:
+        e1, e2 = hull[1] - hull[0], hull[2] - hull[1]
+        if e1[0] * e2[1] - e1[1] * e2[0] < 0:
+            hull = hull[::-1]
+    return np.roll(hull, -int(np.lexsort((hull[:, 1], hull[:, 0]))[0]), axis=0)
+
+
+def distance_to_polygon_m(points_m: np.ndarray, polygon_m: np.ndarray) -> np.ndarray:
+    """(N,) distance of 2-D points to a convex polygon (counter-clockwise, K >= 1 corners):
+    0 inside, else to the nearest edge.
+
+    >>> square = np.array([[0.0, 0], [2, 0], [2, 2], [0, 2]])
+    >>> distance_to_polygon_m(np.array([[1.0, 1], [3, 1], [3, 3]]), square).round(3).tolist()
+    [0.0, 1.0, 1.414]
+    """
+    pts = np.asarray(points_m, dtype=np.float64)
+    a = np.asarray(polygon_m, dtype=np.float64)
+    b = np.roll(a, -1, axis=0)
+    edge = b - a  # (K, 2)
+    rel = pts[:, None] - a[None]  # (N, K, 2)
+    length2 = np.maximum((edge**2).sum(axis=1), 1e-12)
+    t = np.clip((rel * edge[None]).sum(axis=2) / length2, 0.0, 1.0)
+    gap = np.linalg.norm(rel - t[..., None] * edge[None], axis=2).min(axis=1)
+    if len(a) < 3:
+        return gap
+    cross = edge[None, :, 0] * rel[..., 1] - edge[None, :, 1] * rel[..., 0]
+    return np.where((cross >= 0).all(axis=1), 0.0, gap)
+
+
+def floor_view_mask(
+    camera: Camera, polygon_m: np.ndarray, margin_m: float, shape: tuple[int, int]
+) -> np.ndarray:
+    """(H, W) bool: the pixels of an image of ``shape`` (the camera's image, or a shrunk copy)
+    whose lines of sight meet the floor (z = 0, in front of the camera) within ``margin_m``
+    of ``polygon_m`` (:func:`floor_polygon_m`). Pixels that see a wall, a door or the ceiling
+    meet the floor plane beyond the room, or never."""
+    h, w = shape
+    sx, sy = camera.width / w, camera.height / h
+    v, u = np.mgrid[0:h, 0:w]
+    px = np.column_stack([(u.ravel() + 0.5) * sx - 0.5, (v.ravel() + 0.5) * sy - 0.5])
+    origin, rays = camera.backproject(px)
+    down = rays[:, 2] < -1e-9
+    reach = np.where(down, -origin[2] / np.where(down, rays[:, 2], -1.0), 0.0)
+    hit = origin[:2] + reach[:, None] * rays[:, :2]
+    inside = distance_to_polygon_m(hit, polygon_m) <= margin_m
+    return (down & inside).reshape(h, w)
+
+
+def shadow_region(
+    cfg: BackgroundConfig, rig: Rig, cam: str, shape: tuple[int, int]
+) -> np.ndarray | None:
+    """The ``shadow_region`` of camera ``cam``'s :class:`BackgroundModel`: where it sees the
+    floor (:func:`floor_view_mask`) when ``cfg.shadows_on_floor_only``, else None (shadows
+    everywhere). ``shape``: (H, W) of its frames."""
+    if not cfg.shadows_on_floor_only:
+        return None
+    polygon = floor_polygon_m(np.array([c.centre_m for c in rig]))
+    return floor_view_mask(rig[cam], polygon, cfg.floor_margin_m, shape)
+
+
 def learning_frames_after(cfg: BackgroundConfig, framesets_before: int) -> int:
     """Length of the learning phase of a camera whose first frame comes ``framesets_before``
     frame sets into a run: what is left of the run's learning phase, at least
@@ -165,6 +239,9 @@ class BackgroundModel:
     distance_cap_px : clip ``Silhouettes.dist_outside_px`` at this many frame pixels (about
         half the cost of the distance transform; the pipeline passes what its consumers
         read, :func:`surveil.pipeline.silhouette_distance_cap_px`); None: exact everywhere
+    shadow_region : (H, W) bool, optional -- where MOG2's shadows count as shadows; elsewhere
+        they are foreground (``cfg.shadows_on_floor_only``: :func:`floor_view_mask`). None:
+        everywhere, as MOG2 does by itself.
 
     The first ``learning_frames`` frames are learnt at ``cfg.learning_rate_initial``
     (default -1: MOG2's automatic 1/n, i.e. a running mean of everything seen so far), later
@@ -178,6 +255,7 @@ class BackgroundModel:
         shape: tuple[int, int],
         learning_frames: int | None = None,
         distance_cap_px: float | None = None,
+        shadow_region: np.ndarray | None = None,
     ) -> None:
         if len(shape) != 2 or min(shape) <= 0:
             raise ValueError(f"shape must be (H, W) with positive sizes, got {shape}")
@@ -198,6 +276,13 @@ class BackgroundModel:
         self._open = _ellipse(round(cfg.open_px * scale))
         self._close = _ellipse(round(cfg.close_px * scale) | 1 if cfg.close_px else 0)
         self._people_grow = _ellipse(round(cfg.people_margin_px * scale) * 2 + 1)
+        self._not_shadow: np.ndarray | None = None  # model size: shadows here are foreground
+        if shadow_region is not None:
+            require_shape("shadow_region", shadow_region, self.shape, np.bool_)
+            keep = shadow_region.view(np.uint8)
+            if self._small_size is not None:
+                keep = cv2.resize(keep, self._small_size, interpolation=cv2.INTER_NEAREST)
+            self._not_shadow = keep == 0
         self.reset()
 
     def reset(self) -> None:
@@ -315,7 +400,10 @@ class BackgroundModel:
         self.n_frames += 1
         changed_small = raw != 0 if changed else None
         edges = self.background_edges() if background_edges else None
-        fg = (raw == FOREGROUND).view(np.uint8)
+        fg_bool = raw == FOREGROUND
+        if self._not_shadow is not None:
+            fg_bool |= (raw != 0) & self._not_shadow
+        fg = fg_bool.view(np.uint8)
         fg_raw = fg if foreground else None
         if self._open is not None:
             fg = cv2.morphologyEx(fg, cv2.MORPH_OPEN, self._open)

@@ -80,6 +80,21 @@ class BackgroundConfig:
         "px (their outline flickers)",
         min=0,
     )
+    shadows_on_floor_only: bool = setting(
+        False,
+        "a pixel MOG2 calls shadow counts as shadow only where the camera sees the floor "
+        "(its line of sight meets z = 0 inside the cameras' footprint grown by "
+        "floor_margin_m); elsewhere it is foreground. People cast their shadows on the "
+        "floor; dark skin or hair in front of a dark wall or door has the wall's hue and "
+        "less brightness, which MOG2 takes for a shadow, and the head drops out of the "
+        "silhouette",
+    )
+    floor_margin_m: float = setting(
+        0.5,
+        "the floor is the convex hull of the cameras' positions (x, y) grown by this, m "
+        "(cameras hang on the walls or in the corners of the room)",
+        min=0.0,
+    )
     edges_every_frames: int = setting(
         15,
         "the background image's gradients (for the blob stage's ghost test) are recomputed "

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from surveil.blobs import BackgroundModel, observe
-from surveil.blobs.background import learning_frames_after
+from surveil.blobs.background import learning_frames_after, shadow_region
 from surveil.blobs.settings import BackgroundConfig, BlobConfig
 from surveil.carry import CarryAnalyser, CarryConfig
 from surveil.datatypes import (
@@ -75,6 +75,7 @@ class _Observer:
         self.bg_cfg, self.blob_cfg = BackgroundConfig(), BlobConfig()
         self.skin = load_camera_skin_models(rec.rig_path, rec.camera_names)
         self.models: dict[str, BackgroundModel] = {}
+        self.rig = rec.rig
         self.carry = CarryAnalyser(CarryConfig(), rec.rig)
         self._n_sets = 0
 
@@ -87,7 +88,10 @@ class _Observer:
             model = self.models.get(cam)
             if model is None:
                 frames = learning_frames_after(self.bg_cfg, self._n_sets)
-                model = self.models[cam] = BackgroundModel(self.bg_cfg, img.shape[:2], frames)
+                region = shadow_region(self.bg_cfg, self.rig, cam, img.shape[:2])
+                model = self.models[cam] = BackgroundModel(
+                    self.bg_cfg, img.shape[:2], frames, shadow_region=region
+                )
             out[cam] = observe(img, model, self.skin[cam], self.blob_cfg, cam, heads or None)
         self._n_sets += 1
         if any(m.learning for m in self.models.values()):

@@ -2,7 +2,14 @@ import numpy as np
 import pytest
 
 from surveil.blobs import BackgroundConfig, BackgroundModel
-from surveil.blobs.background import learning_frames_after, silhouettes_from_mask
+from surveil.blobs.background import (
+    distance_to_polygon_m,
+    floor_polygon_m,
+    floor_view_mask,
+    learning_frames_after,
+    silhouettes_from_mask,
+)
+from surveil.camera import look_at
 
 H, W = 120, 160
 
@@ -111,13 +118,32 @@ def test_background_edges_are_the_learnt_scenes_edges_refreshed_every_few_frames
     assert refreshed is not edges and edges[60, 30] < 5
 
 
-def test_shadow_is_background(rng):
-    model = BackgroundModel(BackgroundConfig(learning_frames=20), (H, W))
-    base, frame = _scene(rng)
+@pytest.mark.parametrize("scale", [1.0, 0.5])
+def test_shadow_is_background_only_inside_the_shadow_region(rng, scale):
+    """A darkened patch of the same hue is a shadow where shadows may fall (the floor); in
+    front of a wall it is a dark thing of the wall's hue (dark skin before a brown door)."""
+    cfg = BackgroundConfig(learning_frames=20, model_scale=scale)
+    floor = np.zeros((H, W), bool)
+    floor[70:] = True  # the lower part of the image sees the floor
+    model = BackgroundModel(cfg, (H, W), shadow_region=floor)
+    _, frame = _scene(rng)
     _learn(model, frame)
     img = frame()
-    img[40:100, 10:70] = (img[40:100, 10:70] * 0.65).astype(np.uint8)  # darkened, same hue
-    assert model.step(img).n == 0
+    img[75:115, 10:70] = (img[75:115, 10:70] * 0.65).astype(np.uint8)  # on the floor
+    img[5:45, 90:150] = (img[5:45, 90:150] * 0.65).astype(np.uint8)  # on the wall
+    sil = model.step(img, foreground=True)
+    assert sil.n == 1
+    assert sil.labels[25, 120] == 1 and sil.labels[95, 40] == 0
+    assert sil.foreground[25, 120] and not sil.foreground[95, 40]
+    # without a region, MOG2's shadows are shadows everywhere
+    plain = BackgroundModel(cfg, (H, W))
+    _learn(plain, frame)
+    assert plain.step(img).n == 0
+
+
+def test_shadow_region_must_match_the_frames():
+    with pytest.raises(ValueError, match="shadow_region"):
+        BackgroundModel(BackgroundConfig(), (H, W), shadow_region=np.ones((H, W + 1), bool))
 
 
 def test_empty_scene_has_no_silhouette_and_large_distances(rng):
@@ -263,3 +289,38 @@ def test_a_distance_cap_changes_no_distance_below_it(rng):
     np.testing.assert_allclose(b.dist_outside_px[near], a.dist_outside_px[near], atol=1e-4)
     with pytest.raises(ValueError, match="distance_cap_px"):
         BackgroundModel(cfg, (H, W), distance_cap_px=0)
+
+
+@pytest.mark.parametrize("shape", [(480, 640), (240, 320)])
+def test_floor_view_mask_is_where_lines_of_sight_meet_the_floor_inside_the_room(shape):
+    cam = look_at(
+        "c",
+        np.array([0.25, 0.25, 2.6]),
+        np.array([3.0, 2.5, 0.8]),
+        width=640,
+        height=480,
+        hfov_deg=78,
+    )
+    room = floor_polygon_m(np.array([[0, 0, 2.6], [6, 0, 2.6], [6, 5, 2.6], [0, 5, 2.6]]))
+    mask = floor_view_mask(cam, room, 0.1, shape)
+    assert mask.shape == shape
+    scale = shape[1] / 640
+
+    def seen(point_m):
+        px, depth = cam.project(np.array([point_m]))
+        assert depth[0] > 0 and cam.in_image(px, depth)[0]
+        u, v = np.round((px[0] + 0.5) * scale - 0.5).astype(int)
+        return mask[v, u]
+
+    assert seen([3.0, 2.5, 0.0]) and seen([4.0, 4.5, 0.0])
+    assert seen([3.0, 2.5, 0.8])  # a hand at hip height has the floor behind it ...
+    assert not seen([3.0, 2.5, 1.7])  # ... a head in the middle of the room the far wall
+    assert not seen([3.0, 5.0, 1.2])  # the far wall, its line of sight meets z = 0 beyond
+    assert not seen([6.0, 5.0, 2.6])  # level with the camera: never meets the floor
+
+
+def test_distance_to_a_degenerate_polygon_is_to_its_segment():
+    # two cameras: the "hull" is the segment between them, grown by the margin
+    line = floor_polygon_m(np.array([[0.0, 0, 2.5], [4.0, 0, 2.5]]))
+    d = distance_to_polygon_m(np.array([[2.0, 0.0], [2.0, 1.0], [5.0, 0.0]]), line)
+    assert d.round(6).tolist() == [0.0, 1.0, 1.0]
