@@ -113,6 +113,7 @@ class _Track:
     split_first_m: float = 0.0  # distance between the modes when they first appeared
     split_gain_m: float = 0.0  # how much farther apart they are now
     split_vel_mps: np.ndarray | None = None  # (2, 3) their velocities
+    out_of_reach_frames: int = 0  # consecutive frame sets a pair was beyond an owner's reach
     history: deque = field(default_factory=lambda: deque(maxlen=HISTORY_FRAMES))
 
     @property
@@ -253,6 +254,7 @@ class MultiTargetTracker:
         reacquired = self._reacquire(seeds, t_ns)
         merged = self._merge_lost(t_ns, reacquired, pairs, seeds)
         parted = self._split_on_seeds(seeds, set(reacquired.values()))
+        self._split_out_of_reach()
         rel_v = self._candidate_rel_v(candidates, observations)
         self._label(pts, rel_v, t_ns, observations or {}, set(reacquired) | set(merged))
         transitions = self._advance_phases(t_ns, pairs, drifted, reacquired, merged)
@@ -704,6 +706,47 @@ class MultiTargetTracker:
             parted.update((tr.id, other.id))
             log.debug("t%d / t%d part on a new candidate at %s", tr.id, other.id, seed.position_m)
         return out
+
+    def _split_out_of_reach(self) -> None:
+        """Part combined pairs of two people's hands that one owner cannot reach.
+
+        A pair that joined two people's hands and then followed one of them home, while the
+        other went unseen (three_people: after an exchange, the giver's hand in one view
+        only), has no second mode to separate on, and keeps both labels on the hand it
+        follows. Once its estimate has been farther than ``arm_reach_m`` +
+        ``person_margin_m`` from one owner's head for ``out_of_reach_frames`` frame sets,
+        that owner's hand is not in it: the pair separates with the hand left behind where
+        the pair joined (its last known place, at rest), and the other keeps the estimate;
+        the owner rule (:meth:`_separate`) gives each its mode."""
+        lc, lcfg = self.cfg.lifecycle, self.cfg.labelling
+        if lc.out_of_reach_frames <= 0:
+            return
+        done: set[int] = set()
+        for tr in self._tracks.values():
+            if tr.phase is not Phase.COMBINED or tr.partner not in self._tracks or tr.id in done:
+                continue
+            other = self._tracks[tr.partner]
+            done.update((tr.id, other.id))
+            heads = self._owner_heads(tr, other)
+            if heads is None or tr.joined_m is None or tr.apart_frames >= lc.separate_frames:
+                tr.out_of_reach_frames = other.out_of_reach_frames = 0
+                continue
+            reach = np.linalg.norm(heads - tr.mean_m, axis=1)
+            beyond = bool((reach > lcfg.arm_reach_m + lcfg.person_margin_m).any())
+            count = tr.out_of_reach_frames + 1 if beyond else 0
+            tr.out_of_reach_frames = other.out_of_reach_frames = count
+            if count < lc.out_of_reach_frames:
+                continue
+            split = np.array([tr.mean_m, tr.joined_m])
+            vel = np.array([tr.vel_mps, np.zeros(3)])
+            for t in (tr, other):
+                t.split_m, t.split_vel_mps = split, vel
+                t.apart_frames = lc.separate_frames
+                t.split_gain_m = np.inf
+                t.out_of_reach_frames = 0
+            log.debug(
+                "t%d / t%d part: %.2f m from a head, out of reach", tr.id, other.id, reach.max()
+            )
 
     def _owner_heads(self, a: _Track, b: _Track) -> np.ndarray | None:
         """(2, 3) the heads of a's and b's people when a and b are hands of two different
@@ -1331,6 +1374,7 @@ class MultiTargetTracker:
                 partner_id = pairs[tid]
                 tr.partner = partner_id
                 tr.joined_ns, tr.joined_m = t_ns, tr.mean_m.copy()
+                tr.out_of_reach_frames = 0
                 gap = float(np.linalg.norm(tr.mean_m - self._tracks[partner_id].mean_m))
                 tr.joined_apart = gap >= lc.combine_distance_m
                 tr.unjoin_frames = 0
@@ -1345,6 +1389,7 @@ class MultiTargetTracker:
                 tr.partner = None
                 tr.joined_ns = tr.joined_m = None
                 tr.joined_apart, tr.unjoin_frames = False, 0
+                tr.out_of_reach_frames = 0
                 tr.before_vec_m = None
                 tr.apart_frames = 0
                 tr.split_m = tr.split_vel_mps = None

@@ -132,6 +132,14 @@ class LifecycleConfig:
         "it instead of a new tracker starting there, m",
         min=0.0,
     )
+    out_of_reach_frames: int = setting(
+        3,
+        "a combined pair of two people's hands whose estimate has been farther than "
+        "arm_reach_m + person_margin_m from one owner's head for this many consecutive frame "
+        "sets separates without a second mode: it followed the other hand home while the "
+        "first went unseen; that hand is restarted where the pair joined (0 = off)",
+        min=0,
+    )
     leave_speed_mps: float = setting(
         3.0,
         "the fastest a target leaves a combined pair: a seed where an unexplained candidate "

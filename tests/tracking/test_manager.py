@@ -660,6 +660,36 @@ def test_a_ghost_beside_shaking_hands_does_not_take_a_hand_away(rig, rng):
     _assert_right_hands_owned(out[-1], a, b)
 
 
+@pytest.mark.parametrize("frames_out", [3, 0])
+def test_a_pair_that_follows_one_hand_out_of_the_others_reach_parts(rig, rng, frames_out):
+    """After a handshake b's hand goes home and a's hand is never seen again: the pair has no
+    second mode. Once it is beyond the reach of a's head (out_of_reach_frames), a's hand is
+    not in it: the pair parts, b's hand keeps b's label at b's side and a's label stays at
+    the meeting point, where a's hand was last seen; a's tracker is then lost there. With
+    the test off the pair stays combined, both labels on b's hand."""
+    frames, a, b, meet = shaking_hands(hold=6)
+    home_b = [meet + u * (b["right_hand"] - meet) for u in np.linspace(0, 1, 7)[1:]]
+    frames += [[*_head_and_left(a), *_head_and_left(b), rb] for rb in home_b + [home_b[-1]] * 20]
+    cfg = TrackingConfig(lifecycle=LifecycleConfig(out_of_reach_frames=frames_out))
+    out = run(MultiTargetTracker(cfg, rig, seed=11), frames, rng)
+    last = out[-1]
+    splits = [t for f in out for t in f.transitions if t.old is Phase.COMBINED]
+    if frames_out == 0:
+        assert not splits
+        assert all(s.phase is Phase.COMBINED for s in last.targets if "right" in s.label)
+        return
+    assert len(splits) == 2
+    _owner_of(last, b["right_hand"])  # a live target is on b's hand ...
+    heads = {s.person: s.mean_m for s in last.targets if s.label.endswith("/head")}
+    pa = min(heads, key=lambda k: np.linalg.norm(heads[k] - a["head"]))
+    pb = min(heads, key=lambda k: np.linalg.norm(heads[k] - b["head"]))
+    hands = {s.label: s for s in last.targets if s.label.endswith("right_hand")}
+    assert np.linalg.norm(hands[f"p{pb}/right_hand"].mean_m - b["right_hand"]) < 0.05
+    assert hands[f"p{pb}/right_hand"].phase is Phase.NORMAL
+    assert hands[f"p{pa}/right_hand"].phase is Phase.LOST
+    assert np.linalg.norm(hands[f"p{pa}/right_hand"].mean_m - meet) < 0.1
+
+
 @pytest.mark.parametrize("leave_speed_mps", [3.0, 1e9])
 def test_a_ghost_that_stood_beside_the_hands_as_they_joined_does_not_part_them(
     rig, rng, leave_speed_mps
