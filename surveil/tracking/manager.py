@@ -467,6 +467,17 @@ class MultiTargetTracker:
             return -np.inf
         return float(np.linalg.norm(b0 - a0) - np.linalg.norm(b1 - a1)) / ((t1 - t0) * 1e-9)
 
+    def _combined_pairs(self) -> list[tuple[_Track, _Track]]:
+        """Every combined pair once, as (tracker, its partner), by the first one's id."""
+        out: list[tuple[_Track, _Track]] = []
+        done: set[int] = set()
+        for tr in self._tracks.values():
+            if tr.phase is not Phase.COMBINED or tr.partner not in self._tracks or tr.id in done:
+                continue
+            out.append((tr, self._tracks[tr.partner]))
+            done.update((tr.id, tr.partner))
+        return out
+
     def _measure_separation(
         self, pts: np.ndarray, prior: np.ndarray, dt_s: float, t_ns: int
     ) -> None:
@@ -483,12 +494,7 @@ class MultiTargetTracker:
         where it appeared. Frames whose modes say the pair never met (:meth:`_never_met`)
         are counted too (``unjoin_frames``)."""
         lc = self.cfg.lifecycle
-        done: set[int] = set()
-        for tr in self._tracks.values():
-            if tr.phase is not Phase.COMBINED or tr.partner not in self._tracks or tr.id in done:
-                continue
-            other = self._tracks[tr.partner]
-            done.update((tr.id, other.id))
+        for tr, other in self._combined_pairs():
             split = None
             if len(pts):
                 share = self._shares.get(tr.id, 1.0) + self._shares.get(other.id, 1.0)
@@ -721,12 +727,7 @@ class MultiTargetTracker:
         lc, lcfg = self.cfg.lifecycle, self.cfg.labelling
         if lc.out_of_reach_frames <= 0:
             return
-        done: set[int] = set()
-        for tr in self._tracks.values():
-            if tr.phase is not Phase.COMBINED or tr.partner not in self._tracks or tr.id in done:
-                continue
-            other = self._tracks[tr.partner]
-            done.update((tr.id, other.id))
+        for tr, other in self._combined_pairs():
             heads = self._owner_heads(tr, other)
             if heads is None or tr.joined_m is None or tr.apart_frames >= lc.separate_frames:
                 tr.out_of_reach_frames = other.out_of_reach_frames = 0
