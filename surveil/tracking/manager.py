@@ -717,7 +717,7 @@ class MultiTargetTracker:
         """Part combined pairs of two people's hands that one owner cannot reach.
 
         A pair that joined two people's hands and then followed one of them home, while the
-        other went unseen (three_people: after an exchange, the giver's hand in one view
+        other went unseen (three_people: after an exchange, the taker's hand in one view
         only), has no second mode to separate on, and keeps both labels on the hand it
         follows. Once its estimate has been farther than ``arm_reach_m`` +
         ``person_margin_m`` from one owner's head for ``out_of_reach_frames`` frame sets,
