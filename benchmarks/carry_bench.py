@@ -16,7 +16,8 @@ against the ground truth's ``held_by``:
 - hue error of the carried objects (true positives, circular, degrees);
 - milliseconds per frame set of ``CarryAnalyser.step`` (median, 95th percentile).
 
-``--masks`` chooses where the per-camera inputs come from: ``none`` the default skin model and
+``--masks`` chooses where the per-camera inputs come from: ``none`` each camera's skin model
+(saved beside the rig by ``surveil train-skin``, else the default) and
 MOG2 silhouettes on every frame; ``skin`` the ground-truth skin mask with MOG2 silhouettes;
 ``all`` ground-truth skin and silhouettes. With ground-truth masks only the frames that have
 masks (every 5th) are analysed (the background model still sees every frame).
@@ -36,12 +37,12 @@ import numpy as np
 from surveil.blobs.background import BackgroundModel, silhouettes_from_mask
 from surveil.blobs.extract import extract_blobs
 from surveil.blobs.settings import BackgroundConfig, BlobConfig
-from surveil.blobs.skin import default_skin_model
 from surveil.carry import CarryAnalyser, CarryConfig
 from surveil.carry.hue import circular_distance_deg
 from surveil.datatypes import CameraObservation, Phase, TargetSnapshot, parse_label
 from surveil.io.ground_truth import MaskClass, load_ground_truth
 from surveil.io.recording import open_recording
+from surveil.io.skin_model import load_camera_skin_models
 from surveil.synth.scene import synthesise
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -81,7 +82,7 @@ def bench_recording(rec_dir: Path, masks: str, cfg: CarryConfig, details: bool =
     rec = open_recording(rec_dir)
     gt = load_ground_truth(rec_dir)
     bg_cfg, blob_cfg = BackgroundConfig(), BlobConfig()
-    skin_model = default_skin_model()
+    skin_models = load_camera_skin_models(rec.rig_path, rec.camera_names)
     models: dict[str, BackgroundModel] = {}
     analyser = CarryAnalyser(cfg, rec.rig)
     hand_idx = [j for j, lab in enumerate(gt.labels) if lab.endswith("hand")]
@@ -99,7 +100,7 @@ def bench_recording(rec_dir: Path, masks: str, cfg: CarryConfig, details: bool =
                 models[cam] = BackgroundModel(bg_cfg, img.shape[:2])
             sil = models[cam].step(img)
             if masks == "none":
-                skin = skin_model.classify(img)
+                skin = skin_models[cam].classify(img)
             else:
                 path = rec_dir / "ground_truth" / "masks" / cam / f"{fs.index:06d}.png"
                 if not path.exists():

@@ -7,9 +7,9 @@ from collections.abc import Iterator
 
 from surveil.blobs.background import BackgroundModel, learning_frames_after, shadow_region
 from surveil.blobs.extract import extract_blobs
-from surveil.blobs.skin import default_skin_model
 from surveil.datatypes import CameraObservation, FrameSet
 from surveil.io.recording import Recording
+from surveil.io.skin_model import load_camera_skin_models
 from surveil.pipeline import PipelineConfig
 
 
@@ -24,9 +24,10 @@ def observe_recording(
 
     Background models start on the run's clock as in ``surveil run``
     (:func:`learning_frames_after`); blobs are chosen for ``n_people`` (default: the number
-    of silhouettes, where a run uses its tracked heads); the default skin model is used.
+    of silhouettes, where a run uses its tracked heads); each camera's skin model is the one
+    a run uses: saved beside the rig (``surveil train-skin``), else the default.
     """
-    skin_model = default_skin_model()
+    skin_models = load_camera_skin_models(rec.rig_path, rec.camera_names)
     models: dict[str, BackgroundModel] = {}
     for fs in rec.framesets(stop=max_frames):
         observations: dict[str, CameraObservation] = {}
@@ -45,7 +46,7 @@ def observe_recording(
             t0 = time.perf_counter()
             sil = models[cam].step(img, **cfg.blobs.background_requests())
             t1 = time.perf_counter()
-            skin = skin_model.classify(img)
+            skin = skin_models[cam].classify(img)
             t2 = time.perf_counter()
             blobs = extract_blobs(skin, sil, cfg.blobs, n_people, img)
             t3 = time.perf_counter()
