@@ -234,6 +234,7 @@ def cmd_rig_export(args: argparse.Namespace) -> ExitCode:
 def cmd_train_skin(args: argparse.Namespace) -> ExitCode:
     import numpy as np
 
+    from surveil.blobs.settings import SkinConfig
     from surveil.io.recording import open_recording
     from surveil.io.skin_model import (
         build_default_skin_model,
@@ -244,6 +245,8 @@ def cmd_train_skin(args: argparse.Namespace) -> ExitCode:
 
     rng = np.random.default_rng(args.seed)
     if args.generic:
+        if args.unbounded:
+            raise SurveilError("--unbounded is for per-camera models; --generic has no bound")
         if args.out is None:
             raise SurveilError("train-skin --generic needs --out FILE.npz")
         model = build_default_skin_model(args.recordings, rng, every=args.every)
@@ -255,8 +258,9 @@ def cmd_train_skin(args: argparse.Namespace) -> ExitCode:
     rec_dir = args.recordings[0]
     rec = open_recording(rec_dir)
     out_dir = args.out or skin_models_dir(rec.rig_path)
+    cfg = SkinConfig(bound_by_generic=not args.unbounded)
     models = train_camera_skin_models(
-        rec_dir, rng, every=args.every, on_progress=progress_bar("train-skin", args.quiet)
+        rec_dir, rng, cfg, every=args.every, on_progress=progress_bar("train-skin", args.quiet)
     )
     for cam, model in models.items():
         path = out_dir / f"{cam}.npz"
@@ -494,6 +498,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="one model for all cameras of all recordings (+ a photo), like the default",
     )
     p.add_argument("--every", type=int, default=2, help="use every N-th annotated frame [2]")
+    p.add_argument(
+        "--unbounded",
+        action="store_true",
+        help="per-camera models may call skin what the generic model does not (default: they "
+        "only narrow it; docs/blobs.md)",
+    )
     p.add_argument("--seed", type=int, default=0, help="seed of the pixel subsample [0]")
     p.set_defaults(command=cmd_train_skin)
 

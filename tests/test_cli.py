@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from surveil.blobs import SkinConfig, default_skin_model
 from surveil.cli import ExitCode, main
 from surveil.io.skin_model import load_skin_model
 
@@ -37,6 +38,20 @@ def test_train_skin_writes_one_model_per_camera(small_recording, tmp_path, capsy
     assert [p.stem for p in models] == ["cam0", "cam1", "cam2", "cam3"]
     model = load_skin_model(models[0])
     assert model.meta["camera"] == "cam0" and 0.0 < model.lut.mean() < 0.6
+    assert model.meta["threshold"] == SkinConfig().camera_threshold
+    # bounded by the generic model: it calls skin no colour the generic model does not
+    generic = default_skin_model().lut
+    assert "bounded_by" in model.meta and not (model.lut & ~generic).any()
+
+
+def test_train_skin_unbounded_models_reach_beyond_the_generic_one(small_recording, tmp_path):
+    out = tmp_path / "skin"
+    args = ["-q", "train-skin", str(small_recording), "--out", str(out), "--every", "6"]
+    assert main([*args, "--unbounded"]) == ExitCode.OK
+    model = load_skin_model(out / "cam0.npz")
+    assert "bounded_by" not in model.meta
+    assert (model.lut & ~default_skin_model().lut).any()
+    assert main([*args, "--generic", "--unbounded"]) == ExitCode.BAD_INPUT
 
 
 def test_run_also_writes_a_rerun_review_file(small_recording, tmp_path, capsys):

@@ -190,9 +190,17 @@ def train_camera_skin_models(
     on_progress: Callable[[int, int], None] | None = None,
 ) -> dict[str, SkinModel]:
     """One skin model per camera of an annotated recording (paper 004 section 6.2: cameras
-    differ in gain and white balance, so each gets its own classifier)."""
+    differ in gain and white balance, so each gets its own classifier).
+
+    Each classifier's table is compiled at ``cfg.camera_threshold`` and, with
+    ``cfg.bound_by_generic``, ANDed with the generic default model (docs/blobs.md,
+    "Per-camera models").
+    """
+    from surveil.blobs.skin import default_skin_model
+
     cfg = cfg or SkinConfig()
     rec = open_recording(Path(recording_dir))
+    generic = default_skin_model() if cfg.bound_by_generic else None
     models = {}
     for i, cam in enumerate(rec.camera_names):
         pixels, labels = training_pixels_from_recording(
@@ -204,13 +212,30 @@ def train_camera_skin_models(
         )
         if not labels.any():
             raise InputError(f"{recording_dir}: camera {cam} has no annotated skin pixel")
-        model = train_skin_model(pixels, labels, cfg, rng)
-        models[cam] = dataclasses.replace(
-            model, meta={**model.meta, "camera": cam, "trained_on": Path(recording_dir).name}
+        model = train_skin_model(
+            pixels, labels, dataclasses.replace(cfg, threshold=cfg.camera_threshold), rng
         )
+        meta = {**model.meta, "camera": cam, "trained_on": Path(recording_dir).name}
+        if generic is not None:
+            model = bound_skin_model(model, generic)
+            meta["bounded_by"] = generic.meta.get("trained_on", "generic default model")
+        models[cam] = dataclasses.replace(model, meta=meta)
         if on_progress is not None:
             on_progress(i + 1, len(rec.camera_names))
     return models
+
+
+def bound_skin_model(model: SkinModel, bound: SkinModel) -> SkinModel:
+    """``model`` restricted to the colours ``bound`` also calls skin (tables ANDed).
+
+    >>> a, b = np.zeros((32, 32, 32), bool), np.zeros((32, 32, 32), bool)
+    >>> a[:2], b[1:] = True, True
+    >>> int(bound_skin_model(SkinModel(a, 5), SkinModel(b, 5)).lut.sum()) == 32 * 32
+    True
+    """
+    if model.bits != bound.bits:
+        raise ValueError(f"lookup tables differ in bits: {model.bits} and {bound.bits}")
+    return dataclasses.replace(model, lut=model.lut & bound.lut)
 
 
 def load_camera_skin_models(rig_path: Path, camera_names: Sequence[str]) -> dict[str, SkinModel]:
