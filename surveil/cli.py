@@ -40,8 +40,9 @@ def configure_logging(verbosity: int) -> None:
     )
 
 
-def progress_bar(desc: str, quiet: bool) -> Callable[[int, int], None]:
-    """An ``on_progress(done, total)`` callback drawing a tqdm bar on stderr."""
+def progress_bar(desc: str, quiet: bool, unit: str = "frame") -> Callable[[int, int], None]:
+    """An ``on_progress(done, total)`` callback drawing a tqdm bar on stderr (``unit``: what
+    is counted)."""
     from tqdm import tqdm
 
     state: dict = {}
@@ -53,7 +54,7 @@ def progress_bar(desc: str, quiet: bool) -> Callable[[int, int], None]:
             state["bar"] = tqdm(
                 total=total,
                 desc=desc,
-                unit="frame",
+                unit=unit,
                 file=sys.stderr,
                 dynamic_ncols=True,
                 leave=False,
@@ -260,12 +261,17 @@ def cmd_train_skin(args: argparse.Namespace) -> ExitCode:
     out_dir = args.out or skin_models_dir(rec.rig_path)
     cfg = SkinConfig(bound_by_generic=not args.unbounded)
     models = train_camera_skin_models(
-        rec_dir, rng, cfg, every=args.every, on_progress=progress_bar("train-skin", args.quiet)
+        rec_dir,
+        rng,
+        cfg,
+        every=args.every,
+        on_progress=progress_bar("train-skin", args.quiet, unit="camera"),
     )
     for cam, model in models.items():
         path = out_dir / f"{cam}.npz"
         save_skin_model(model, path)
-        print(f"wrote {path} ({model.lut.mean():.1%} of colours are skin)")
+        bound = ", bounded by the generic model" if "bounded_by" in model.meta else ""
+        print(f"wrote {path} ({model.lut.mean():.1%} of colours are skin{bound})")
     return ExitCode.OK
 
 
