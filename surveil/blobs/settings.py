@@ -114,7 +114,8 @@ class SkinConfig:
         0.1,
         "skin probability threshold of per-camera models: trained on a few frames of one "
         "camera, their skin region is narrow, so a low threshold keeps their recall near the "
-        "generic model's (measured: 0.5 loses 5-15 points of held-out skin recall, 0.1 none)",
+        "generic model's (measured on held-out frames: 0.73-0.90 of skin kept at 0.5, 0.93-0.95 "
+        "at 0.1, the generic model 0.85-0.98)",
         min=0.0,
         max=1.0,
     )
