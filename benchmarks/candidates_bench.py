@@ -1,6 +1,7 @@
 """Benchmark the per-camera observations and 3D candidates (issue 3) on synthetic recordings.
 
-    python benchmarks/candidates_bench.py [--out out/bench_synth] [--max-frames N] [NAME ...]
+    python benchmarks/candidates_bench.py [--out out/bench_synth] [--max-frames N] [--config TOML]
+        [NAME ...]
 
 Renders (or reuses) every bundled scenario, runs background subtraction, skin
 classification, blob extraction and candidate generation with the default settings on the
@@ -28,17 +29,19 @@ from front_end import observe_recording
 
 from surveil.io.ground_truth import MaskClass, load_ground_truth
 from surveil.io.recording import open_recording
-from surveil.pipeline import PipelineConfig
+from surveil.pipeline import PipelineConfig, load_pipeline_config
 from surveil.recon.candidates import make_candidates
 from surveil.synth.scene import synthesise
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def bench_recording(rec_dir: Path, max_frames: int | None) -> dict:
+def bench_recording(
+    rec_dir: Path, max_frames: int | None, cfg: PipelineConfig | None = None
+) -> dict:
     rec = open_recording(rec_dir)
     gt = load_ground_truth(rec_dir)
-    cfg = PipelineConfig()
+    cfg = cfg or PipelineConfig()
     bg_cfg, cand_cfg = cfg.background, cfg.candidates
     times: dict[str, list[float]] = {"background": [], "skin": [], "blobs": [], "candidates": []}
     found50 = found100 = countable = false = n_sets = 0
@@ -94,7 +97,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("names", nargs="*")
     parser.add_argument("--out", type=Path, default=ROOT / "out" / "bench_synth")
     parser.add_argument("--max-frames", type=int, default=None)
+    parser.add_argument(
+        "--config", type=Path, default=None, help="pipeline settings (TOML) instead of defaults"
+    )
     args = parser.parse_args(argv)
+    cfg = load_pipeline_config(args.config)
     paths = [ROOT / "recordings" / f"{n}.toml" for n in args.names] or sorted(
         (ROOT / "recordings").glob("*.toml")
     )
@@ -106,7 +113,7 @@ def main(argv: list[str] | None = None) -> int:
     for path in paths:
         rec_dir = args.out / path.stem
         synthesise(path, rec_dir)
-        r = bench_recording(rec_dir, args.max_frames)
+        r = bench_recording(rec_dir, args.max_frames, cfg)
         print(
             f"| {path.stem} | {r['recall50']:.3f} | {r['recall100']:.3f} "
             f"| {r['false_per_set']:.2f} | {r['limbs_per_set']:.2f} | {r['mean_mm']:.0f} "

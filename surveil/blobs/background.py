@@ -25,6 +25,7 @@ from surveil.validate import require_shape
 log = logging.getLogger(__name__)
 
 FOREGROUND = 255  # MOG2 output: 255 foreground, 127 shadow, 0 background
+GAIN_BLOCK_PX = 8  # gain compensation compares 8x8 block means of frame and background
 
 
 def sobel_magnitude(grey: np.ndarray) -> np.ndarray:
@@ -37,6 +38,32 @@ def sobel_magnitude(grey: np.ndarray) -> np.ndarray:
     gx = cv2.Sobel(grey, cv2.CV_32F, 1, 0, ksize=3)
     gy = cv2.Sobel(grey, cv2.CV_32F, 0, 1, ksize=3)
     return cv2.magnitude(gx, gy)
+
+
+def relative_gain(frame: np.ndarray, background: np.ndarray, usable: np.ndarray) -> np.ndarray:
+    """(3,) float64 per-channel factor g with g * frame ~ background: the median over the
+    ``usable`` pixels of background / frame, channel by channel. Pixels near black or
+    saturation in either image do not count (their ratio says nothing); with none left the
+    gain is 1. The median, not a ratio of means: a person who appears in one frame (a camera
+    that starts late, someone stepping out from behind a pillar) covers pixels that were
+    background in the last one.
+
+    frame, background : (H, W, 3) uint8 -- the model passes 8x8 block means (the median of a
+        few thousand ratios is then exact to well under a grey level, and cheap)
+    usable : (H, W) bool
+
+    >>> bg = np.full((4, 4, 3), (100, 120, 80), np.uint8)
+    >>> frame = (bg * np.array([1.1, 1.0, 0.8])).astype(np.uint8)
+    >>> frame[0, :3] = (20, 200, 40)  # someone in front of the background
+    >>> relative_gain(frame, bg, np.ones((4, 4), bool)).round(2).tolist()
+    [0.91, 1.0, 1.25]
+    """
+    f = frame[usable].astype(np.float32)
+    b = background[usable].astype(np.float32)
+    ok = ((f > 15) & (f < 240) & (b > 15) & (b < 240)).all(axis=1)
+    if not ok.any():
+        return np.ones(3)
+    return np.median(b[ok] / f[ok], axis=0).astype(np.float64)
 
 
 def _ellipse(diameter_px: int) -> np.ndarray | None:
@@ -299,6 +326,10 @@ class BackgroundModel:
         self._background: np.ndarray | None = None  # MOG2's background image, model size
         self._background_frame = 0
         self._unlearnt = 0  # frames since the model last learnt (held back for people)
+        self._was_background: np.ndarray | None = None  # uint8: last frame's background
+        self._background_blocks: np.ndarray | None = None  # its 8x8 block means
+        self._blocks_frame = -1
+        self.gain = np.ones(3)  # the last frame's per-channel gain (gain_compensation)
 
     @property
     def learning(self) -> bool:
@@ -328,6 +359,34 @@ class BackgroundModel:
             self._background = self._mog.getBackgroundImage()
             self._background_frame = self.n_frames
         return self._background
+
+    def _compensate_gain(self, small: np.ndarray) -> np.ndarray:
+        """``small`` (the frame at model size) with each channel scaled by its gain against
+        the background image (:func:`relative_gain`), on means of 8x8 blocks: the blocks that
+        were wholly background in the last frame, or every block when those are fewer than a
+        quarter (a light switched on: nearly everything changed). Estimated every
+        ``cfg.gain_every_frames`` frames; in between the last gain is applied."""
+        if self.n_frames % self.cfg.gain_every_frames and self.n_frames > 1:
+            return self._apply_gain(small)
+        h, w = small.shape[:2]
+        blocks = (max(1, w // GAIN_BLOCK_PX), max(1, h // GAIN_BLOCK_PX))
+        background = self._background_image()
+        if self._background_blocks is None or self._blocks_frame != self._background_frame:
+            self._background_blocks = cv2.resize(background, blocks, interpolation=cv2.INTER_AREA)
+            self._blocks_frame = self._background_frame
+        frame_blocks = cv2.resize(small, blocks, interpolation=cv2.INTER_AREA)
+        usable = np.ones(blocks[::-1], bool)
+        if self._was_background is not None:
+            clean = cv2.resize(self._was_background, blocks, interpolation=cv2.INTER_AREA) == 255
+            if clean.mean() >= 0.25:
+                usable = clean
+        self.gain = relative_gain(frame_blocks, self._background_blocks, usable)
+        return self._apply_gain(small)
+
+    def _apply_gain(self, small: np.ndarray) -> np.ndarray:
+        if np.abs(self.gain - 1.0).max() < 0.004:  # under one grey level at 255: skip
+            return small
+        return cv2.transform(small, np.diag(self.gain))
 
     def _learn_around(self, small: np.ndarray, labels: np.ndarray, people_px: np.ndarray) -> None:
         """Let MOG2 learn from ``small`` (the frame at model size) every
@@ -385,6 +444,8 @@ class BackgroundModel:
         small = bgr
         if self._small_size is not None:
             small = cv2.resize(bgr, self._small_size, interpolation=cv2.INTER_AREA)
+        if self.cfg.gain_compensation and self.n_frames > 0:
+            small = self._compensate_gain(small)
         protect = (
             self.cfg.protect_people
             and not self.learning
@@ -398,6 +459,8 @@ class BackgroundModel:
             raw = self._mog.apply(small, learningRate=rate)
             self._unlearnt = 0
         self.n_frames += 1
+        if self.cfg.gain_compensation:
+            self._was_background = cv2.compare(raw, 0, cv2.CMP_EQ)
         changed_small = raw != 0 if changed else None
         edges = self.background_edges() if background_edges else None
         fg_bool = raw == FOREGROUND

@@ -95,6 +95,19 @@ class BackgroundConfig:
         "(cameras hang on the walls or in the corners of the room)",
         min=0.0,
     )
+    gain_compensation: bool = setting(
+        True,
+        "before MOG2, each frame's colour channels are scaled so that the pixels the model "
+        "last found to be background match its background image: slow illumination drift and "
+        "a camera's automatic exposure do not turn the floor into foreground "
+        '(docs/blobs.md, "Illumination drift")',
+    )
+    gain_every_frames: int = setting(
+        3,
+        "the gain is estimated every this many frames and applied to every frame (light "
+        "changes over seconds; an estimate costs about 0.35 ms, a third of MOG2)",
+        min=1,
+    )
     edges_every_frames: int = setting(
         15,
         "the background image's gradients (for the blob stage's ghost test) are recomputed "

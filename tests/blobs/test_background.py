@@ -7,6 +7,7 @@ from surveil.blobs.background import (
     floor_polygon_m,
     floor_view_mask,
     learning_frames_after,
+    relative_gain,
     silhouettes_from_mask,
 )
 from surveil.camera import look_at
@@ -324,3 +325,62 @@ def test_distance_to_a_degenerate_polygon_is_to_its_segment():
     line = floor_polygon_m(np.array([[0.0, 0, 2.5], [4.0, 0, 2.5]]))
     d = distance_to_polygon_m(np.array([[2.0, 0.0], [2.0, 1.0], [5.0, 0.0]]), line)
     assert d.round(6).tolist() == [0.0, 1.0, 1.0]
+
+
+def _lit(frame, level):
+    return np.clip(np.rint(frame.astype(np.float32) * level), 0, 255).astype(np.uint8)
+
+
+@pytest.mark.parametrize("scale", [1.0, 0.5])
+def test_illumination_drift_is_undone_not_taken_for_foreground(rng, scale):
+    """The light brightens by 8 % after learning while a person walks in, large enough to
+    hold a quarter of the frame: the person is the only silhouette, and the model's gain is
+    the drift's inverse (estimated every third frame). Without the compensation the whole
+    frame turns foreground."""
+    found = {}
+    for compensate in (True, False):
+        cfg = BackgroundConfig(
+            learning_frames=20,
+            min_person_area_px=100,
+            model_scale=scale,
+            gain_compensation=compensate,
+        )
+        model = BackgroundModel(cfg, (H, W))
+        _, frame = _scene(rng)
+        _learn(model, frame)
+        for k in range(23):  # 20 frames of drift, then 3 at the new level
+            img = frame()
+            img[10:110, 30 + k : 80 + k] = (20, 200, 40)
+            sil = model.step(_lit(img, 1.0 + 0.004 * min(k + 1, 20)))
+        found[compensate] = sil
+        if compensate:
+            assert model.gain == pytest.approx(np.full(3, 1 / 1.08), abs=0.01)
+    sil = found[True]
+    assert sil.n == 1
+    assert sil.mask.sum() == pytest.approx(100 * 50, rel=0.1)
+    assert found[False].mask.mean() > 0.9
+
+
+def test_relative_gain_ignores_what_is_not_usable_and_clipped_pixels():
+    bg = np.full((10, 10, 3), 100, np.uint8)
+    frame = np.full((10, 10, 3), 125, np.uint8)  # 25 % brighter
+    frame[:6] = 30  # someone dark in front of most of the background
+    frame[6:, :2] = 255  # and saturated highlights
+    usable = np.zeros((10, 10), bool)
+    usable[6:] = True
+    assert relative_gain(frame, bg, usable).tolist() == pytest.approx([0.8] * 3)
+    assert relative_gain(frame, bg, np.zeros((10, 10), bool)).tolist() == [1.0] * 3
+
+
+def test_a_person_appearing_at_once_does_not_move_the_gain(rng):
+    """A person who appears in one frame covers pixels that were background in the last: the
+    gain, a median, stays 1 and only the person is foreground."""
+    cfg = BackgroundConfig(learning_frames=20, min_person_area_px=100)
+    model = BackgroundModel(cfg, (H, W))
+    _, frame = _scene(rng)
+    _learn(model, frame)
+    img = frame()
+    img[10:110, 20:70] = (250, 250, 250)  # a quarter of the frame, bright
+    sil = model.step(img)
+    assert model.gain == pytest.approx(np.ones(3), abs=0.01)
+    assert sil.n == 1 and sil.mask.sum() == pytest.approx(100 * 50, rel=0.1)
