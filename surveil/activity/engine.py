@@ -369,6 +369,11 @@ class ActivityEngine:
         if not _orders(rule, labels) or not _persons_ok(rule, labels):
             return
         th = rule.thresholds
+        if th.max_meeting_drop_m > 0 and not self._meet_high_enough(
+            ids, labels, th.max_meeting_drop_m
+        ):
+            log.debug("%s: %s met too low", rule.rule_id, "+".join(labels))
+            return
         start = self._approach_start(ids, t_ns, rule)
         since = t_ns - _ns(th.max_approach_s)
         before = tuple(self._confident_carry(i, t_ns, since, th.min_confidence) for i in ids)
@@ -382,6 +387,19 @@ class ActivityEngine:
             combined=combined,
         )
         log.debug("%s: climax of %s at %d ns", rule.rule_id, "+".join(labels), t_ns)
+
+    def _meet_high_enough(
+        self, ids: tuple[int, int], labels: tuple[str, str], max_drop_m: float
+    ) -> bool:
+        """Whether the two limbs (their mean now) are at most ``max_drop_m`` below the lower
+        head of the persons in ``labels``; True when a limb or every head is unknown."""
+        now = self._frames[-1].targets
+        if any(i not in now for i in ids):
+            return True
+        meet_z = 0.5 * (now[ids[0]].mean_m[2] + now[ids[1]].mean_m[2])
+        heads = [self._head_of(_person(lab)) for lab in labels]
+        heads_z = [h[2] for h in heads if h is not None]
+        return not heads_z or meet_z >= min(heads_z) - max_drop_m
 
     def _on_transitions(self, frame: TrackFrame, cur: _Frame) -> list[ActivityEvent]:
         """Open episodes at joins, mark separations. A join of a pair whose previous episode

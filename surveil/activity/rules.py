@@ -120,6 +120,14 @@ class Thresholds:
         min=0.0,
         max=3.0,
     )
+    max_meeting_drop_m: float = setting(
+        0.0,
+        "pair rules: the limbs must meet at most this far below the head of the person "
+        "taking part (two people: the lower head), e.g. a clap happens in front of the chest, "
+        "hands that meet at the hips while walking do not clap; 0 = anywhere, m",
+        min=0.0,
+        max=3.0,
+    )
     seen_reach_m: float = setting(
         0.15,
         "pick/place: a hand whose track begins during the look-back (a tracker started or "

@@ -57,12 +57,13 @@ def two_people(hand1_carry=None, hand2_carry=None, *, join=True, gap=0.06, swap=
     return Script(tracks, joins)
 
 
-def one_person(left_carry=None, right_carry=None, *, join=True):
-    """p1's hands meet in front of the chest from 1.0 s to 1.3 s."""
+def one_person(left_carry=None, right_carry=None, *, join=True, height=1.2):
+    """p1's hands meet in front of the chest (``height``, the head at 1.65 m) from 1.0 s to
+    1.3 s."""
     tracks = [
         head(1, 1, 0.0),
-        hand(2, 1, L, meet(P1_LEFT_REST, (0.3, 0.02, 1.2), t_leave=1.3), left_carry),
-        hand(3, 1, R, meet(P1_RIGHT_REST, (0.3, -0.02, 1.2), t_leave=1.3), right_carry),
+        hand(2, 1, L, meet(P1_LEFT_REST, (0.3, 0.02, height), t_leave=1.3), left_carry),
+        hand(3, 1, R, meet(P1_RIGHT_REST, (0.3, -0.02, height), t_leave=1.3), right_carry),
     ]
     return Script(tracks, [Join(2, 3, 1.0, 1.3)] if join else [])
 
@@ -104,6 +105,17 @@ def test_clap_one_person_no_objects(rules):
     assert events[0].actors == ("p1/left_hand", "p1/right_hand")
     assert events[0].persons == ("p1",)
     assert events[0].climax_ns == 1 * S
+
+
+@pytest.mark.parametrize("join", [True, False])
+def test_hands_meeting_at_the_hips_do_not_clap(rules, join):
+    """The clap rule's max_meeting_drop_m (0.65): hands 0.8 m below the head (two trackers
+    that drifted together while the person walks) are no clap, joined or only close; 0.6 m
+    below still is."""
+    assert run(rules, one_person(join=join, height=0.85).stream()) == []
+    assert [e.activity for e in run(rules, one_person(join=join, height=1.05).stream())] == [
+        "clap"
+    ]
 
 
 @pytest.mark.parametrize("giver", ["p1", "p2"])

@@ -90,6 +90,11 @@ def test_rule_metadata_round_trips_through_json():
         ('limbs = ["hand", "hand"]\ntransfer = "up"', "rule.bad.transfer", "'a_to_b', 'none'"),
         ('limbs = ["hand", "hand"]\nseparation_m = -1', "rule.bad.separation_m", ">= 0.01"),
         ('limbs = ["hand", "hand"]\nmin_confidence = 2', "rule.bad.min_confidence", "<= 1.0"),
+        (
+            'limbs = ["hand", "hand"]\nmax_meeting_drop_m = -0.1',
+            "rule.bad.max_meeting_drop_m",
+            ">= 0",
+        ),
         ('limbs = ["hand", "hand"]\nstill_s = "long"', "rule.bad.still_s", "number"),
         ('limbs = ["hand", "hand"]\ncarry_before = [0]', "rule.bad.carry_before", "one entry"),
         (
