@@ -101,6 +101,7 @@ class _PairEpisode:
     combined: bool
     separated_ns: int | None = None
     apart_ns: int | None = None
+    meeting_drop_m: float | None = None  # least depth below the head while together
 
 
 @dataclass(slots=True)
@@ -369,11 +370,6 @@ class ActivityEngine:
         if not _orders(rule, labels) or not _persons_ok(rule, labels):
             return
         th = rule.thresholds
-        if th.max_meeting_drop_m > 0 and not self._meet_high_enough(
-            ids, labels, th.max_meeting_drop_m
-        ):
-            log.debug("%s: %s met too low", rule.rule_id, "+".join(labels))
-            return
         start = self._approach_start(ids, t_ns, rule)
         since = t_ns - _ns(th.max_approach_s)
         before = tuple(self._confident_carry(i, t_ns, since, th.min_confidence) for i in ids)
@@ -385,21 +381,22 @@ class ActivityEngine:
             start_ns=start,
             before=before,
             combined=combined,
+            meeting_drop_m=self._meeting_drop_m(ids, labels),
         )
         log.debug("%s: climax of %s at %d ns", rule.rule_id, "+".join(labels), t_ns)
 
-    def _meet_high_enough(
-        self, ids: tuple[int, int], labels: tuple[str, str], max_drop_m: float
-    ) -> bool:
-        """Whether the two limbs (their mean now) are at most ``max_drop_m`` below the lower
-        head of the persons in ``labels``; True when a limb or every head is unknown."""
+    def _meeting_drop_m(self, ids: tuple[int, int], labels: tuple[str, str]) -> float | None:
+        """How far below the lower head of the persons in ``labels`` the two limbs (the mean
+        of their estimates now) are, metres; None when a limb or every head is unknown. A
+        pair episode keeps the least of these from its climax to its separation: trackers
+        join while the hands still rise to a clap."""
         now = self._frames[-1].targets
         if any(i not in now for i in ids):
-            return True
+            return None
         meet_z = 0.5 * (now[ids[0]].mean_m[2] + now[ids[1]].mean_m[2])
         heads = [self._head_of(_person(lab)) for lab in labels]
         heads_z = [h[2] for h in heads if h is not None]
-        return not heads_z or meet_z >= min(heads_z) - max_drop_m
+        return float(min(heads_z) - meet_z) if heads_z else None
 
     def _on_transitions(self, frame: TrackFrame, cur: _Frame) -> list[ActivityEvent]:
         """Open episodes at joins, mark separations. A join of a pair whose previous episode
@@ -486,6 +483,9 @@ class ActivityEngine:
             th = ep.rule.thresholds
             d = _distance(cur.targets.get(ep.ids[0]), cur.targets.get(ep.ids[1]))
             if ep.separated_ns is None:
+                drop = self._meeting_drop_m((ep.ids[0], ep.ids[1]), ep.labels)
+                if drop is not None and (ep.meeting_drop_m is None or drop < ep.meeting_drop_m):
+                    ep.meeting_drop_m = drop
                 if not ep.combined and d is None:
                     del self._pairs[key]  # a limb vanished while close: nothing to decide
                     continue
@@ -536,6 +536,15 @@ class ActivityEngine:
 
     def _decide_pair(self, ep: _PairEpisode, cur: _Frame, timed_out: bool) -> ActivityEvent | None:
         rule, th, t = ep.rule, ep.rule.thresholds, cur.t_ns
+        drop = ep.meeting_drop_m
+        if th.max_meeting_drop_m > 0 and drop is not None and drop > th.max_meeting_drop_m:
+            log.debug(
+                "%s: %s met no higher than %.2f m below the head",
+                rule.rule_id,
+                "+".join(ep.labels),
+                drop,
+            )
+            return None
         after = self._after(ep, cur)
         for a, b in _orders(rule, ep.labels):
             bef = (ep.before[a], ep.before[b])
