@@ -381,7 +381,7 @@ class ActivityEngine:
             start_ns=start,
             before=before,
             combined=combined,
-            meeting_drop_m=self._meeting_drop_m(ids, labels),
+            meeting_drop_m=self._meeting_drop_m(ids, labels) if th.max_meeting_drop_m else None,
         )
         log.debug("%s: climax of %s at %d ns", rule.rule_id, "+".join(labels), t_ns)
 
@@ -483,9 +483,12 @@ class ActivityEngine:
             th = ep.rule.thresholds
             d = _distance(cur.targets.get(ep.ids[0]), cur.targets.get(ep.ids[1]))
             if ep.separated_ns is None:
-                drop = self._meeting_drop_m((ep.ids[0], ep.ids[1]), ep.labels)
-                if drop is not None and (ep.meeting_drop_m is None or drop < ep.meeting_drop_m):
-                    ep.meeting_drop_m = drop
+                if th.max_meeting_drop_m > 0:
+                    drop = self._meeting_drop_m((ep.ids[0], ep.ids[1]), ep.labels)
+                    if drop is not None and (
+                        ep.meeting_drop_m is None or drop < ep.meeting_drop_m
+                    ):
+                        ep.meeting_drop_m = drop
                 if not ep.combined and d is None:
                     del self._pairs[key]  # a limb vanished while close: nothing to decide
                     continue
