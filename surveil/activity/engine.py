@@ -59,6 +59,7 @@ from surveil.activity.predicates import (
     away_from_body,
     carry_satisfies,
     carry_state,
+    conserve_objects,
     object_moved,
     still_since,
 )
@@ -548,9 +549,22 @@ class ActivityEngine:
                 drop,
             )
             return None
-        after = self._after(ep, cur)
+        before, after = ep.before, self._after(ep, cur)
+        if th.conserve_objects and all(limb.endswith("hand") for limb in rule.limbs):
+            before, after, inferred = conserve_objects(
+                before, after, th.min_confidence, th.hue_tolerance_deg
+            )
+            if inferred is not None:
+                log.debug(
+                    "%s: %s carry %s of %s inferred: %s",
+                    rule.rule_id,
+                    "+".join(ep.labels),
+                    "before" if inferred < 2 else "after",
+                    ep.labels[inferred % 2],
+                    _describe((*before, *after)[inferred], th.min_confidence),
+                )
         for a, b in _orders(rule, ep.labels):
-            bef = (ep.before[a], ep.before[b])
+            bef = (before[a], before[b])
             aft = (after[a], after[b])
             used: list[CarryEstimate | None] = []
             ok = True
@@ -600,7 +614,7 @@ class ActivityEngine:
                 "%s: %s did not match (carry before %s, after %s)",
                 rule.rule_id,
                 "+".join(ep.labels),
-                [_describe(e, th.min_confidence) for e in ep.before],
+                [_describe(e, th.min_confidence) for e in before],
                 [_describe(e, th.min_confidence) for e in after],
             )
         return None

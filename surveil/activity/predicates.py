@@ -41,6 +41,71 @@ def carry_satisfies(required: bool | None, state: bool | None) -> bool:
     return required is None or state is required
 
 
+def conserve_objects(
+    before: tuple[CarryEstimate | None, CarryEstimate | None],
+    after: tuple[CarryEstimate | None, CarryEstimate | None],
+    min_confidence: float,
+    hue_tolerance_deg: float,
+) -> tuple[tuple[CarryEstimate | None, ...], tuple[CarryEstimate | None, ...], int | None]:
+    """Two meeting hands' carry estimates with one unknown state filled from the other three.
+
+    Two hands that meet and part neither create nor destroy objects: they hold as many
+    after as before. When exactly one of the four states is unknown (no estimate, or one
+    below ``min_confidence``), that count decides it; an inferred carrying state takes the
+    hue of the object the other side has and this side does not account for. The inferred
+    estimate's confidence is the least of the three it came from. Nothing is inferred when
+    zero or several states are unknown, when the count leaves no 0-or-1 answer, or when an
+    inferred carrying state has no single hue to take.
+
+    Returns ``(before, after, which)``: ``which`` is the index 0-3 (before a, before b,
+    after a, after b) of the inferred state, or None.
+
+    >>> a0 = CarryEstimate(1, "p1/right_hand", 0, True, 120.0, 0.9)
+    >>> b0 = CarryEstimate(2, "p2/left_hand", 0, False, None, 0.8)
+    >>> a1 = CarryEstimate(1, "p1/right_hand", 9, False, None, 0.7)
+    >>> bef, aft, which = conserve_objects((a0, b0), (a1, None), 0.3, 25.0)
+    >>> which, aft[1].carrying, aft[1].hue_deg, aft[1].confidence
+    (3, True, 120.0, 0.7)
+    """
+    four = [*before, *after]
+    states = [carry_state(e, min_confidence) for e in four]
+    unknown = [k for k, state in enumerate(states) if state is None]
+    if len(unknown) != 1:
+        return before, after, None
+    k = unknown[0]
+    side, other = (0, 2) if k < 2 else (2, 0)
+    here = [four[side + j] for j in (0, 1) if side + j != k]
+    carrying = sum(bool(states[other + j]) for j in (0, 1)) - sum(
+        bool(states[side + j]) for j in (0, 1) if side + j != k
+    )
+    if carrying not in (0, 1):
+        return before, after, None
+    hue = None
+    if carrying:
+        held_here = [e.hue_deg for e in here if e is not None and e.carrying]
+        unaccounted = [
+            e.hue_deg
+            for e in four[other : other + 2]
+            if e is not None
+            and e.carrying
+            and e.hue_deg is not None
+            and all(h is None or hue_distance_deg(h, e.hue_deg) > hue_tolerance_deg for h in held_here)
+        ]
+        if len(unaccounted) != 1:
+            return before, after, None
+        hue = unaccounted[0]
+    template = four[k] or four[k ^ 2]  # the same hand at the other decision point
+    four[k] = CarryEstimate(
+        template.target_id if template is not None else -1,
+        template.label if template is not None else "",
+        template.t_ns if template is not None else 0,
+        bool(carrying),
+        hue,
+        min(e.confidence for j, e in enumerate(four) if j != k and e is not None),
+    )
+    return (four[0], four[1]), (four[2], four[3]), k
+
+
 def object_moved(
     giver_before: CarryEstimate | None,
     giver_after: CarryEstimate | None,

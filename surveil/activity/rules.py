@@ -154,6 +154,11 @@ class Thresholds:
         min=0.0,
         max=1.0,
     )
+    conserve_objects: bool = setting(
+        True,
+        "two hands that meet and part hold as many objects after as before: when one of "
+        "their four carry states is unknown, the other three decide it",
+    )
 
 
 _THRESHOLD_KEYS = tuple(f.name for f in dataclasses.fields(Thresholds))

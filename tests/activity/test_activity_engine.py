@@ -134,21 +134,22 @@ def test_exchange_between_two_people_either_direction(rules, giver):
 
 
 @pytest.mark.parametrize("faded_s", [0.4, 2.5])
-def test_giver_whose_estimate_fades_just_before_contact_still_gives(rules, faded_s):
+def test_giver_whose_estimate_fades_just_before_contact_still_gives(tmp_path, rules, faded_s):
     """The giver's tracker lags its hand on the fast approach and its carry confidence falls
     below min_confidence (0.3) for the last 0.4 s before the join at 1.0 s: its latest
     confident estimate of the max_approach_s (2 s) before counts as "before". If it was never
-    confident in those 2 s (faded 2.5 s before), "before" is unknown and nothing fires."""
+    confident in those 2 s (faded 2.5 s before), "before" is unknown: the object the taker
+    holds after must have come from it (``conserve_objects``); without that inference
+    nothing fires."""
     gives = switch(1.0 - faded_s, holding(GREEN), switch(1.2, holding(GREEN, conf=0.2), empty()))
     takes = switch(1.2, empty(), holding(GREEN))
     script = two_people(gives, takes)
     script.duration_s = 4.0
     events = run(rules, script.stream())
-    if faded_s < 2.0:
-        assert [e.activity for e in events] == ["exchange"]
-        assert (events[0].from_actor, events[0].to_actor) == ("p1/right_hand", "p2/right_hand")
-    else:
-        assert events == []
+    assert [e.activity for e in events] == ["exchange"]
+    assert (events[0].from_actor, events[0].to_actor) == ("p1/right_hand", "p2/right_hand")
+    without = run(no_conservation(tmp_path, rules), script.stream())
+    assert [e.activity for e in without] == (["exchange"] if faded_s < 2.0 else [])
 
 
 def test_self_exchange_between_own_hands(rules):
@@ -328,6 +329,42 @@ def test_decision_waits_for_confident_carry_after_the_separation(rules):
     assert [e.activity for e in events] == ["exchange"]
     assert events[0].end_ns >= late_s * 1e9
     assert events[0].confidence > 0.5  # decided on evidence, not by the timeout
+
+
+def no_conservation(tmp_path: Path, rules):
+    """The default rules with ``conserve_objects = false``."""
+    text = Path(rules.sources[0]).read_text()
+    off = tmp_path / "default.toml"
+    off.write_text(text.replace("conserve_objects = true", "conserve_objects = false"))
+    assert off.read_text() != text
+    return load_rules([off])
+
+
+def test_one_unknown_carry_state_is_inferred_by_conservation(tmp_path: Path, rules):
+    """The left hand's carry before the clap is unknown (its tracker sat on the shirt); the
+    right hand was empty and both are empty after: no object appeared or vanished, so the
+    left hand was empty too and the clap stands. Without the inference it is lost."""
+    left = switch(1.2, empty(conf=0.1), empty())
+    script = one_person(left, empty())
+    assert [e.activity for e in run(rules, script.stream())] == ["clap"]
+    assert run(no_conservation(tmp_path, rules), script.stream()) == []
+
+
+def test_taker_whose_carry_after_is_unknown_received_the_object(rules):
+    """The giver held green and is empty after; the taker was empty and reads unknown after
+    (its hand hidden by the object): the object must be in the taker's hand."""
+    gives = switch(1.2, holding(GREEN), empty())
+    takes = switch(1.2, empty(), holding(GREEN, conf=0.1))
+    ev = only(run(rules, two_people(gives, takes).stream()), "exchange")
+    assert (ev.from_actor, ev.to_actor) == ("p1/right_hand", "p2/right_hand")
+    assert ev.object_hue_deg == pytest.approx(GREEN)
+
+
+def test_conservation_does_not_invent_a_transfer(rules):
+    """The giver still holds its object after, the taker's state after is unknown: the count
+    says the taker is empty, so there is neither an exchange nor a handshake."""
+    takes = switch(1.2, empty(), empty(conf=0.1))
+    assert run(rules, two_people(holding(GREEN), takes).stream()) == []
 
 
 def test_exchange_needs_the_same_object(rules):

@@ -96,6 +96,11 @@ def test_rule_metadata_round_trips_through_json():
             ">= 0",
         ),
         ('limbs = ["hand", "hand"]\nstill_s = "long"', "rule.bad.still_s", "number"),
+        (
+            'limbs = ["hand", "hand"]\nconserve_objects = "yes"',
+            "rule.bad.conserve_objects",
+            "true or false",
+        ),
         ('limbs = ["hand", "hand"]\ncarry_before = [0]', "rule.bad.carry_before", "one entry"),
         (
             'limbs = ["hand", "hand"]\ncarry_after = [0, 2]',
