@@ -89,7 +89,9 @@ def conserve_objects(
             if e is not None
             and e.carrying
             and e.hue_deg is not None
-            and all(h is None or hue_distance_deg(h, e.hue_deg) > hue_tolerance_deg for h in held_here)
+            and all(
+                h is None or hue_distance_deg(h, e.hue_deg) > hue_tolerance_deg for h in held_here
+            )
         ]
         if len(unaccounted) != 1:
             return before, after, None

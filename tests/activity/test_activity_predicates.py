@@ -1,0 +1,62 @@
+"""conserve_objects: which unknown carry state two meeting hands' other three decide."""
+
+from __future__ import annotations
+
+import pytest
+
+from surveil.activity.predicates import conserve_objects
+from surveil.datatypes import CarryEstimate
+
+
+def est(carrying: bool | None, hue: float | None = None, conf: float = 0.9, tid: int = 1):
+    """An estimate; ``carrying=None`` gives an unconfident (unknown) one."""
+    if carrying is None:
+        return CarryEstimate(tid, "p1/left_hand", 0, False, None, 0.05)
+    return CarryEstimate(tid, "p1/left_hand", 0, carrying, hue, conf)
+
+
+def infer(before, after):
+    return conserve_objects(before, after, min_confidence=0.3, hue_tolerance_deg=25.0)
+
+
+@pytest.mark.parametrize(
+    ("before", "after", "which", "carrying", "hue"),
+    [
+        ((est(False), est(None)), (est(False), est(False)), 1, False, None),
+        ((est(True, 120.0), est(False)), (est(False), None), 3, True, 120.0),
+        ((None, est(False)), (est(False), est(True, 120.0)), 0, True, 120.0),
+        ((est(True, 120.0), est(False)), (est(True, 118.0), est(None)), 3, False, None),
+        # two objects before, one hand keeps its own: the other took the second
+        ((est(True, 120.0), est(True, 10.0)), (est(True, 12.0), None), 3, True, 120.0),
+    ],
+)
+def test_one_unknown_state_is_decided_by_the_count(before, after, which, carrying, hue):
+    bef, aft, k = infer(before, after)
+    assert k == which
+    got = (*bef, *aft)[k]
+    assert got.carrying is carrying
+    assert got.hue_deg == hue
+    assert 0.3 <= got.confidence <= 0.9
+
+
+def test_the_inferred_confidence_is_the_least_of_the_evidence():
+    bef, aft, k = infer((est(False, conf=0.95), None), (est(False, conf=0.4), est(False)))
+    assert k == 1 and bef[1].confidence == pytest.approx(0.4)
+
+
+@pytest.mark.parametrize(
+    ("before", "after"),
+    [
+        # nothing unknown, or two unknown: nothing to infer / too little evidence
+        ((est(False), est(False)), (est(False), est(False))),
+        ((est(None), est(False)), (est(False), est(None))),
+        # the count leaves no 0-or-1 answer: two objects after, none before
+        ((est(False), None), (est(True, 120.0), est(True, 10.0))),
+        # a carrying state to infer, but no single unaccounted hue to give it
+        ((est(True, None), est(False)), (est(False), None)),
+    ],
+)
+def test_nothing_is_inferred_without_a_unique_answer(before, after):
+    bef, aft, k = infer(before, after)
+    assert k is None
+    assert (bef, aft) == (before, after)
