@@ -68,42 +68,38 @@ def conserve_objects(
     (3, True, 120.0, 0.7)
     """
     four = [*before, *after]
-    states = [carry_state(e, min_confidence) for e in four]
-    unknown = [k for k, state in enumerate(states) if state is None]
+    unknown = [j for j, e in enumerate(four) if carry_state(e, min_confidence) is None]
     if len(unknown) != 1:
         return before, after, None
     k = unknown[0]
-    side, other = (0, 2) if k < 2 else (2, 0)
-    here = [four[side + j] for j in (0, 1) if side + j != k]
-    carrying = sum(bool(states[other + j]) for j in (0, 1)) - sum(
-        bool(states[side + j]) for j in (0, 1) if side + j != k
-    )
+    other = 2 if k < 2 else 0
+    # every estimate but the k-th is known (present and confident)
+    here = [four[(k & 2) + j] for j in (0, 1) if (k & 2) + j != k]
+    there = four[other : other + 2]
+    carrying = sum(e.carrying for e in there) - sum(e.carrying for e in here)
     if carrying not in (0, 1):
         return before, after, None
     hue = None
     if carrying:
-        held_here = [e.hue_deg for e in here if e is not None and e.carrying]
+        held_here = [e.hue_deg for e in here if e.carrying and e.hue_deg is not None]
         unaccounted = [
             e.hue_deg
-            for e in four[other : other + 2]
-            if e is not None
-            and e.carrying
+            for e in there
+            if e.carrying
             and e.hue_deg is not None
-            and all(
-                h is None or hue_distance_deg(h, e.hue_deg) > hue_tolerance_deg for h in held_here
-            )
+            and all(hue_distance_deg(h, e.hue_deg) > hue_tolerance_deg for h in held_here)
         ]
         if len(unaccounted) != 1:
             return before, after, None
         hue = unaccounted[0]
     template = four[k] or four[k ^ 2]  # the same hand at the other decision point
     four[k] = CarryEstimate(
-        template.target_id if template is not None else -1,
-        template.label if template is not None else "",
-        template.t_ns if template is not None else 0,
+        template.target_id,
+        template.label,
+        template.t_ns,
         bool(carrying),
         hue,
-        min(e.confidence for j, e in enumerate(four) if j != k and e is not None),
+        min(e.confidence for j, e in enumerate(four) if j != k),
     )
     return (four[0], four[1]), (four[2], four[3]), k
 
