@@ -74,14 +74,14 @@ def conserve_objects(
     k = unknown[0]
     other = 2 if k < 2 else 0
     # every estimate but the k-th is known (present and confident)
-    here = [four[(k & 2) + j] for j in (0, 1) if (k & 2) + j != k]
+    beside = four[k ^ 1]  # the other hand at the same decision point
     there = four[other : other + 2]
-    carrying = sum(e.carrying for e in there) - sum(e.carrying for e in here)
+    carrying = sum(e.carrying for e in there) - beside.carrying
     if carrying not in (0, 1):
         return before, after, None
     hue = None
     if carrying:
-        held_here = [e.hue_deg for e in here if e.carrying and e.hue_deg is not None]
+        held_here = [beside.hue_deg] if beside.carrying and beside.hue_deg is not None else []
         unaccounted = [
             e.hue_deg
             for e in there
