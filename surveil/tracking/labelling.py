@@ -198,6 +198,35 @@ def lateral_offsets_m(
     return (np.asarray(hands_m)[:, :2] - np.asarray(head_m)[:2]) @ left_axis(facing_xy)
 
 
+def across_body(
+    hands_m: np.ndarray,
+    challenger_m: np.ndarray,
+    head_m: np.ndarray,
+    facing_xy: np.ndarray,
+    side_m: float,
+) -> np.ndarray:
+    """(H,) bool: each hand is on the other side of the person from ``challenger_m``, both
+    at least ``side_m`` to their side of the head (False for all when ``side_m`` is 0).
+
+    A hand tracker to a person's right is not their left hand, however well two views see
+    it: a shirt region by the right elbow, as strong as a hand, must not take the slot of
+    a left hand that holds a ball out in front (three_people).
+
+    >>> hands = np.array([[0.0, 0.25, 0.8], [0.0, -0.2, 0.8], [0.0, 0.05, 0.8]])
+    >>> across_body(hands, np.array([0.0, -0.3, 1.0]), np.zeros(3), np.array([1.0, 0]), 0.1)
+    array([ True, False, False])
+    """
+    hands_m = np.asarray(hands_m, dtype=np.float64)
+    require_shape("hands_m", hands_m, (None, 3), np.floating)
+    if side_m <= 0:
+        return np.zeros(len(hands_m), dtype=bool)
+    lat = lateral_offsets_m(hands_m, head_m, facing_xy)
+    lat_c = float(lateral_offsets_m(np.asarray(challenger_m)[None], head_m, facing_xy)[0])
+    if abs(lat_c) < side_m:
+        return np.zeros(len(hands_m), dtype=bool)
+    return (np.sign(lat) == -np.sign(lat_c)) & (np.abs(lat) >= side_m)
+
+
 def decide_left_right(
     hands_m: np.ndarray, head_m: np.ndarray, facing_xy: np.ndarray
 ) -> tuple[Limb, ...]:

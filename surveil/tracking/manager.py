@@ -1125,12 +1125,16 @@ class MultiTargetTracker:
                 and self._tracks[h].phase is Phase.NORMAL
                 and lab.owned_elsewhere(self._tracks[h].mean_m, c.mean_m, heads, k, lcfg)
             }
+            across = self._across_body(p, k, heads, c) if p is not None else set()
             held = [
                 self._tracks[h]
                 for h in (p.hand_ids if p is not None else [])
                 if self._tracks[h].phase is Phase.NORMAL
                 and (
-                    c.support_ema - self._tracks[h].support_ema >= lcfg.contest_margin
+                    (
+                        c.support_ema - self._tracks[h].support_ema >= lcfg.contest_margin
+                        and h not in across
+                    )
                     or h in by_owner
                 )
             ]
@@ -1154,6 +1158,19 @@ class MultiTargetTracker:
             h.take_label_off()
             if lcfg.redecide_sides and h.id in by_owner:
                 self._redecide_sides(p, k, heads)
+
+    def _across_body(self, p: _Person, k: int, heads: np.ndarray, c: _Track) -> set[int]:
+        """Ids of ``p``'s hands on the other side of the body from the challenger ``c``
+        (:func:`lab.across_body`); none until ``p``'s facing evidence reaches facing_min."""
+        lcfg = self.cfg.labelling
+        if lcfg.contest_side_m <= 0 or np.linalg.norm(p.facing_ev) < lcfg.facing_min:
+            return set()
+        ids = [h for h in p.hand_ids if h in self._tracks]
+        if not ids:
+            return set()
+        hands = np.array([self._tracks[h].mean_m for h in ids])
+        other = lab.across_body(hands, c.mean_m, heads[k], p.facing_ev, lcfg.contest_side_m)
+        return {h for h, o in zip(ids, other, strict=True) if o}
 
     def _redecide_sides(self, p: _Person, k: int, heads: np.ndarray) -> None:
         """Decide ``p``'s left and right hands afresh from its facing direction, when it has
@@ -1184,7 +1201,9 @@ class MultiTargetTracker:
         could re-acquire only within its gate around its last position, which its person
         has walked away from (pick_place: both hands lost at the table, the person carrying
         the box to the cabinet with their hands tracked by new, unlabelled trackers). A lost
-        hand re-acquired in this frame set (``returning``) keeps its slot."""
+        hand re-acquired in this frame set (``returning``) keeps its slot, and so does one
+        across the body from ``tr`` (:meth:`_across_body`): a left hand lost while it
+        reached out is not replaced by a tracker on the person's right."""
         wait_s = self.cfg.labelling.yield_lost_s
         if wait_s <= 0:
             return -1
@@ -1204,14 +1223,16 @@ class MultiTargetTracker:
         if k < 0:
             return -1
         p = persons[k]
+        across = self._across_body(p, k, heads, tr)
         lost = sorted(
-            (h for h in p.hand_ids if stale(h)), key=lambda h: self._tracks[h].lost_since_ns
+            (h for h in p.hand_ids if stale(h) and h not in across),
+            key=lambda h: self._tracks[h].lost_since_ns,
         )
         while len(p.hand_ids) >= 2 and lost:
             gone = lost.pop(0)
             log.debug("t%d (%s) lost: its slot goes to t%d", gone, self._tracks[gone].label, tr.id)
             self._remove(gone)
-        return k
+        return k if len(p.hand_ids) < 2 else -1
 
     def _update_facing(self) -> None:
         lcfg = self.cfg.labelling

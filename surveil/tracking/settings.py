@@ -348,6 +348,13 @@ class LabellingConfig:
         "(and the challenger is clearly more the person's: see labelling.owned_elsewhere; a "
         "ghost on another body, as strong as a real hand, holding the slot)",
     )
+    contest_side_m: float = setting(
+        0.1,
+        "a challenger this far to one side of its person's head (along the facing direction's "
+        "left axis, once the facing evidence reaches facing_min) cannot take the slot of a "
+        "hand this far to the other side (0 = no side check), m",
+        min=0.0,
+    )
     redecide_sides: bool = setting(
         True,
         "a hand that takes a slot by ownership (contest_by_owner) does not inherit the "

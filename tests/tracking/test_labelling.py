@@ -158,3 +158,23 @@ def test_owned_elsewhere_tells_a_ghost_on_another_body_from_a_hand_held_out():
     assert not lab.owned_elsewhere(ghost, ghost + [0.05, 0, 0], heads, 0, cfg)
     # one person alone: nothing to compare with
     assert not lab.owned_elsewhere(ghost, hanging, heads[:1], 0, cfg)
+
+
+@pytest.mark.parametrize(
+    ("challenger_y", "side_m", "expected"),
+    [
+        (-0.3, 0.1, [True, False, False]),  # on the right: only the clearly-left hand is across
+        (0.3, 0.1, [False, True, False]),  # on the left: only the clearly-right hand
+        (0.05, 0.1, [False, False, False]),  # in front of the body: no side to be on
+        (-0.3, 0.0, [False, False, False]),  # the check off
+    ],
+)
+def test_across_body_needs_both_hands_clearly_on_their_sides(challenger_y, side_m, expected):
+    # a person at the origin facing +x: left is +y; hands at +0.25, -0.2 and +0.05 m
+    hands = np.array([[0.2, 0.25, 1.0], [0.0, -0.2, 0.8], [0.3, 0.05, 1.1]])
+    head, facing = np.array([0.0, 0.0, 1.7]), np.array([2.0, 0.0])
+    got = lab.across_body(hands, np.array([0.1, challenger_y, 1.0]), head, facing, side_m)
+    assert got.tolist() == expected
+    # turning the person round swaps its sides
+    flipped = lab.across_body(hands, np.array([0.1, challenger_y, 1.0]), head, -facing, side_m)
+    assert flipped.tolist() == expected

@@ -861,6 +861,72 @@ def test_a_real_hand_takes_its_slot_from_a_weaker_ghost(rig, contest_s):
         assert _owner_of(out[-1], ghost) == "p1/right_hand"
 
 
+@pytest.mark.parametrize("side_m", [0.1, 0.0])
+def test_a_strong_point_at_the_right_elbow_does_not_take_the_left_hands_slot(rig, side_m):
+    """a holds a ball out in front with the left hand, which the ball half hides (prior 0.5);
+    from frame set 40 a strong point (prior 0.95, a shaded shirt the skin stage calls skin)
+    shows 23 cm above the right hand. It out-supports the left hand, but it is on a's right
+    (b faces a, so a's facing is known): it cannot take the left hand's slot and stays
+    unlabelled. With contest_side_m 0 it takes the slot (three_people's p1: the real left
+    hand then stayed unlabelled through the exchange)."""
+    rng = np.random.default_rng(6)
+    a, b = body((2.0, 2.0), 0.0), body((3.2, 2.0), 180.0)
+    held = a["head"] + 0.2 * a["left"] + 0.3 * a["fwd"] - [0, 0, 0.6]
+    shirt = a["right_hand"] + [0, 0, 0.23]
+
+    def frame(points, priors) -> CandidateSet:
+        pts = np.array(points) + rng.normal(0, 0.005, (len(points), 3))
+        return CandidateSet(pts, np.array(priors))
+
+    seen = [a["head"], held, a["right_hand"], b["head"], b["left_hand"], b["right_hand"]]
+    strong = [0.95, 0.5, 0.95, 0.95, 0.95, 0.95]
+    sets = [frame(seen, strong) for _ in range(40)]
+    sets += [frame([*seen, shirt], [*strong, 0.95]) for _ in range(40)]
+    cfg = TrackingConfig(labelling=LabellingConfig(contest_side_m=side_m))
+    trk = MultiTargetTracker(cfg, rig, seed=16)
+    out = [trk.step(i * DT_NS, c) for i, c in enumerate(sets)]
+    assert _owner_of(out[39], held) == "p1/left_hand"
+    assert _owner_of(out[-1], a["right_hand"]) == "p1/right_hand"
+    if side_m > 0:
+        assert _owner_of(out[-1], held) == "p1/left_hand"
+        assert not _owner_of(out[-1], shirt).startswith("p1/")
+    else:
+        assert _owner_of(out[-1], shirt) == "p1/left_hand"
+
+
+@pytest.mark.parametrize("side_m", [0.1, 0.0])
+def test_a_lost_left_hand_gives_its_slot_to_a_tracker_on_the_left(rig, side_m):
+    """a's left hand, held out, jumps 0.34 m further out (a reach faster than its tracker
+    follows): its tracker is lost and a new one starts at the hand. A strong point by the
+    right elbow (a shaded shirt) has been unlabelled since it showed, after the hands. After yield_lost_s the lost
+    left hand's slot goes to the tracker on the left, not to the older one on the right;
+    with contest_side_m 0 the first unlabelled tracker in line, the shirt's, takes it."""
+    rng = np.random.default_rng(7)
+    a, b = body((2.0, 2.0), 0.0), body((3.6, 2.0), 180.0)
+    held = a["head"] + 0.2 * a["left"] + 0.25 * a["fwd"] - [0, 0, 0.6]
+    reach = held + 0.3 * a["fwd"] + 0.15 * a["left"]
+    shirt = a["right_hand"] + [0, 0, 0.23]
+
+    def frame(points) -> CandidateSet:
+        pts = np.array(points) + rng.normal(0, 0.005, (len(points), 3))
+        return CandidateSet(pts, np.full(len(points), 0.95))
+
+    rest = [a["head"], a["right_hand"], b["head"], b["left_hand"], b["right_hand"]]
+    sets = [frame([*rest, held]) for _ in range(20)]
+    sets += [frame([*rest, held, shirt]) for _ in range(20)]
+    sets += [frame([*rest, reach, shirt]) for _ in range(30)]
+    cfg = TrackingConfig(labelling=LabellingConfig(contest_side_m=side_m))
+    trk = MultiTargetTracker(cfg, rig, seed=17)
+    out = [trk.step(i * DT_NS, c) for i, c in enumerate(sets)]
+    assert _owner_of(out[39], held) == "p1/left_hand"
+    assert not _owner_of(out[39], shirt).startswith("p1/")
+    if side_m > 0:
+        assert _owner_of(out[-1], reach) == "p1/left_hand"
+        assert not _owner_of(out[-1], shirt).startswith("p1/")
+    else:
+        assert _owner_of(out[-1], shirt) == "p1/left_hand"
+
+
 @pytest.mark.parametrize(
     ("near_m", "offset_m", "back"), [(0.0, 0.0, False), (0.1, 0.0, True), (0.1, 0.2, False)]
 )
