@@ -96,6 +96,8 @@ class _Track:
     level: float = 0.0
     lost_since_ns: int | None = None
     ever_labelled: bool = False
+    # it lost a hand slot in a contest and has not been labelled since: judged a ghost
+    demoted: bool = False
     type_llr: float = 0.0
     typed_frames: int = 0
     speed_ema_mps: float = 0.0
@@ -126,8 +128,9 @@ class _Track:
 
     @property
     def stray(self) -> bool:
-        """It never joined a person: near a person's target it is a duplicate or a ghost."""
-        return not self.ever_labelled and self.person == 0
+        """It never joined a person, or lost its slot in a contest since it last did: near a
+        person's target it is a duplicate or a ghost."""
+        return (not self.ever_labelled or self.demoted) and self.person == 0
 
     def take_label_off(self) -> None:
         """Back to no person and no limb (the caller frees its person's slot)."""
@@ -1156,6 +1159,7 @@ class MultiTargetTracker:
             p.hand_ids[p.hand_ids.index(h.id)] = c.id
             c.person, c.limb, c.attached_ns, c.contest_ns = p.number, h.limb, t_ns, None
             h.take_label_off()
+            h.demoted = lcfg.contest_demotes
             if lcfg.redecide_sides and h.id in by_owner:
                 self._redecide_sides(p, k, heads)
 
@@ -1429,7 +1433,7 @@ class MultiTargetTracker:
                 tr.misses = 0
                 tr.since_miss = 1 << 30
             if new is Phase.NORMAL:
-                tr.ever_labelled = True
+                tr.ever_labelled, tr.demoted = True, False
             label, pos = before[tid]
             out.append(
                 Transition(

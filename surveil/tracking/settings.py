@@ -348,6 +348,11 @@ class LabellingConfig:
         "(and the challenger is clearly more the person's: see labelling.owned_elsewhere; a "
         "ghost on another body, as strong as a real hand, holding the slot)",
     )
+    contest_demotes: bool = setting(
+        True,
+        "a hand that loses its slot in a contest counts as a stray until it is labelled again: "
+        "a person's tracker or a combined pair that meets it does not combine with it",
+    )
     contest_side_m: float = setting(
         0.1,
         "a challenger this far to one side of its person's head (along the facing direction's "

@@ -861,6 +861,42 @@ def test_a_real_hand_takes_its_slot_from_a_weaker_ghost(rig, contest_s):
         assert _owner_of(out[-1], ghost) == "p1/right_hand"
 
 
+@pytest.mark.parametrize("demotes", [True, False])
+def test_a_ghost_that_lost_its_slot_does_not_combine_with_a_hand_that_passes(rig, demotes):
+    """The ghost of the test above loses the right hand's slot to the real hand, then the
+    real hand moves through the ghost's place and stays there. A contest loser counts as a
+    stray (``contest_demotes``): the hand does not combine with it, and the ghost's
+    tracker is dropped as a duplicate (lost), so the hand keeps its label with no combined
+    state -- which would otherwise open a hand/hand episode with an unlabelled partner.
+    With the option off the two combine."""
+    rng = np.random.default_rng(5)
+    a = body((2.0, 2.0), 0.0)
+    ghost = a["right_hand"] + 0.15 * a["fwd"] + 0.1 * a["left"]
+
+    def frame(points, priors) -> CandidateSet:
+        pts = np.array(points) + rng.normal(0, 0.005, (len(points), 3))
+        return CandidateSet(pts, np.array(priors))
+
+    seen = [a["head"], a["left_hand"], ghost]
+    sets = [frame(seen, [0.95, 0.95, 0.5]) for _ in range(40)]
+    sets += [frame([*seen, a["right_hand"]], [0.95, 0.95, 0.5, 0.95]) for _ in range(30)]
+    for u in np.linspace(0, 1, 7)[1:]:
+        hand = a["right_hand"] + u * (ghost - a["right_hand"])
+        sets.append(frame([*seen, hand], [0.95, 0.95, 0.5, 0.95]))
+    sets += [frame([*seen, ghost], [0.95, 0.95, 0.5, 0.95]) for _ in range(15)]
+    cfg = TrackingConfig(labelling=LabellingConfig(contest_demotes=demotes))
+    trk = MultiTargetTracker(cfg, rig, seed=15)
+    out = [trk.step(i * DT_NS, c) for i, c in enumerate(sets)]
+    assert _owner_of(out[69], a["right_hand"]) == "p1/right_hand"
+    assert not _owner_of(out[69], ghost).startswith("p1/")
+    combined = [t for f in out[70:] for t in f.transitions if t.new is Phase.COMBINED]
+    if demotes:
+        assert not combined
+        assert _owner_of(out[-1], ghost) == "p1/right_hand"
+    else:
+        assert combined
+
+
 @pytest.mark.parametrize("side_m", [0.1, 0.0])
 def test_a_strong_point_at_the_right_elbow_does_not_take_the_left_hands_slot(rig, side_m):
     """a holds a ball out in front with the left hand, which the ball half hides (prior 0.5);
