@@ -833,23 +833,31 @@ def test_hands_lost_while_their_person_walks_away_give_their_slots_to_new_tracke
         assert not _owner_of(last, a["right_hand"] + shift).startswith("p1/")
 
 
+def _noisy_set(rng, points, priors) -> CandidateSet:
+    """Candidates at ``points`` (5 mm noise) with the given priors."""
+    pts = np.array(points) + rng.normal(0, 0.005, (len(points), 3))
+    return CandidateSet(pts, np.asarray(priors, dtype=float))
+
+
+def _ghost_then_hand(rng):
+    """A person's head, left hand and a weak ghost (prior 0.5) 18 cm from the hidden right
+    hand for 40 frame sets; then the right hand shows (0.95) for 30. Returns (body, ghost,
+    the candidates seen throughout, the 70 candidate sets)."""
+    a = body((2.0, 2.0), 0.0)
+    ghost = a["right_hand"] + 0.15 * a["fwd"] + 0.1 * a["left"]
+    seen = [a["head"], a["left_hand"], ghost]
+    sets = [_noisy_set(rng, seen, [0.95, 0.95, 0.5]) for _ in range(40)]
+    sets += [_noisy_set(rng, [*seen, a["right_hand"]], [0.95, 0.95, 0.5, 0.95]) for _ in range(30)]
+    return a, ghost, seen, sets
+
+
 @pytest.mark.parametrize("contest_s", [0.5, 0.0])
 def test_a_real_hand_takes_its_slot_from_a_weaker_ghost(rig, contest_s):
     """A ghost candidate beside the right hand (two views' lines of sight crossing; prior
     0.5) holds the right hand's slot while the real right hand is hidden. When it shows
     (prior 0.95, from several camera pairs) its tracker out-supports the ghost's and takes
     the label after contest_s; with 0 (never) the ghost keeps it."""
-    rng = np.random.default_rng(5)
-    a = body((2.0, 2.0), 0.0)
-    ghost = a["right_hand"] + 0.15 * a["fwd"] + 0.1 * a["left"]  # 18 cm from the real hand
-
-    def frame(points, priors) -> CandidateSet:
-        pts = np.array(points) + rng.normal(0, 0.005, (len(points), 3))
-        return CandidateSet(pts, np.array(priors))
-
-    seen = [a["head"], a["left_hand"], ghost]
-    sets = [frame(seen, [0.95, 0.95, 0.5]) for _ in range(40)]
-    sets += [frame([*seen, a["right_hand"]], [0.95, 0.95, 0.5, 0.95]) for _ in range(30)]
+    a, ghost, _, sets = _ghost_then_hand(np.random.default_rng(5))
     cfg = TrackingConfig(labelling=LabellingConfig(contest_s=contest_s))
     trk = MultiTargetTracker(cfg, rig, seed=15)
     out = [trk.step(i * DT_NS, c) for i, c in enumerate(sets)]
@@ -870,20 +878,13 @@ def test_a_ghost_that_lost_its_slot_does_not_combine_with_a_hand_that_passes(rig
     state -- which would otherwise open a hand/hand episode with an unlabelled partner.
     With the option off the two combine."""
     rng = np.random.default_rng(5)
-    a = body((2.0, 2.0), 0.0)
-    ghost = a["right_hand"] + 0.15 * a["fwd"] + 0.1 * a["left"]
-
-    def frame(points, priors) -> CandidateSet:
-        pts = np.array(points) + rng.normal(0, 0.005, (len(points), 3))
-        return CandidateSet(pts, np.array(priors))
-
-    seen = [a["head"], a["left_hand"], ghost]
-    sets = [frame(seen, [0.95, 0.95, 0.5]) for _ in range(40)]
-    sets += [frame([*seen, a["right_hand"]], [0.95, 0.95, 0.5, 0.95]) for _ in range(30)]
+    a, ghost, seen, sets = _ghost_then_hand(rng)
+    strong = [0.95, 0.95, 0.5, 0.95]
     for u in np.linspace(0, 1, 7)[1:]:
-        hand = a["right_hand"] + u * (ghost - a["right_hand"])
-        sets.append(frame([*seen, hand], [0.95, 0.95, 0.5, 0.95]))
-    sets += [frame([*seen, ghost], [0.95, 0.95, 0.5, 0.95]) for _ in range(15)]
+        sets.append(
+            _noisy_set(rng, [*seen, a["right_hand"] + u * (ghost - a["right_hand"])], strong)
+        )
+    sets += [_noisy_set(rng, [*seen, ghost], strong) for _ in range(15)]
     cfg = TrackingConfig(labelling=LabellingConfig(contest_demotes=demotes))
     trk = MultiTargetTracker(cfg, rig, seed=15)
     out = [trk.step(i * DT_NS, c) for i, c in enumerate(sets)]
@@ -910,14 +911,10 @@ def test_a_strong_point_at_the_right_elbow_does_not_take_the_left_hands_slot(rig
     held = a["head"] + 0.2 * a["left"] + 0.3 * a["fwd"] - [0, 0, 0.6]
     shirt = a["right_hand"] + [0, 0, 0.23]
 
-    def frame(points, priors) -> CandidateSet:
-        pts = np.array(points) + rng.normal(0, 0.005, (len(points), 3))
-        return CandidateSet(pts, np.array(priors))
-
     seen = [a["head"], held, a["right_hand"], b["head"], b["left_hand"], b["right_hand"]]
     strong = [0.95, 0.5, 0.95, 0.95, 0.95, 0.95]
-    sets = [frame(seen, strong) for _ in range(40)]
-    sets += [frame([*seen, shirt], [*strong, 0.95]) for _ in range(40)]
+    sets = [_noisy_set(rng, seen, strong) for _ in range(40)]
+    sets += [_noisy_set(rng, [*seen, shirt], [*strong, 0.95]) for _ in range(40)]
     cfg = TrackingConfig(labelling=LabellingConfig(contest_side_m=side_m))
     trk = MultiTargetTracker(cfg, rig, seed=16)
     out = [trk.step(i * DT_NS, c) for i, c in enumerate(sets)]
@@ -934,8 +931,9 @@ def test_a_strong_point_at_the_right_elbow_does_not_take_the_left_hands_slot(rig
 def test_a_lost_left_hand_gives_its_slot_to_a_tracker_on_the_left(rig, side_m):
     """a's left hand, held out, jumps 0.34 m further out (a reach faster than its tracker
     follows): its tracker is lost and a new one starts at the hand. A strong point by the
-    right elbow (a shaded shirt) has been unlabelled since it showed, after the hands. After yield_lost_s the lost
-    left hand's slot goes to the tracker on the left, not to the older one on the right;
+    right elbow (a shaded shirt) has been unlabelled since it showed, after the hands. After
+    yield_lost_s the lost left hand's slot goes to the tracker on the left, not to the
+    older one on the right;
     with contest_side_m 0 the first unlabelled tracker in line, the shirt's, takes it."""
     rng = np.random.default_rng(7)
     a, b = body((2.0, 2.0), 0.0), body((3.6, 2.0), 180.0)
@@ -944,8 +942,7 @@ def test_a_lost_left_hand_gives_its_slot_to_a_tracker_on_the_left(rig, side_m):
     shirt = a["right_hand"] + [0, 0, 0.23]
 
     def frame(points) -> CandidateSet:
-        pts = np.array(points) + rng.normal(0, 0.005, (len(points), 3))
-        return CandidateSet(pts, np.full(len(points), 0.95))
+        return _noisy_set(rng, points, np.full(len(points), 0.95))
 
     rest = [a["head"], a["right_hand"], b["head"], b["left_hand"], b["right_hand"]]
     sets = [frame([*rest, held]) for _ in range(20)]
