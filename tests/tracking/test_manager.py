@@ -933,8 +933,8 @@ def test_a_lost_left_hand_gives_its_slot_to_a_tracker_on_the_left(rig, side_m):
     follows): its tracker is lost and a new one starts at the hand. A strong point by the
     right elbow (a shaded shirt) has been unlabelled since it showed, after the hands. After
     yield_lost_s the lost left hand's slot goes to the tracker on the left, not to the
-    older one on the right;
-    with contest_side_m 0 the first unlabelled tracker in line, the shirt's, takes it."""
+    older one on the right; with contest_side_m 0 the first unlabelled tracker in line, the
+    shirt's, takes it."""
     rng = np.random.default_rng(7)
     a, b = body((2.0, 2.0), 0.0), body((3.6, 2.0), 180.0)
     held = a["head"] + 0.2 * a["left"] + 0.25 * a["fwd"] - [0, 0, 0.6]
