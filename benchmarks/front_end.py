@@ -44,7 +44,7 @@ def observe_recording(
                     shadow_region=shadow_region(cfg.background, rec.rig, cam, img.shape[:2]),
                 )
             t0 = time.perf_counter()
-            sil = models[cam].step(img, **cfg.blobs.background_requests())
+            sil = models[cam].step(img, **cfg.background_requests())
             t1 = time.perf_counter()
             skin = skin_models[cam].classify(img)
             t2 = time.perf_counter()

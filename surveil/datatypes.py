@@ -386,6 +386,10 @@ class BlobSet:
     silhouette : (B,) int32 -- label of the silhouette component holding the blob (0 none)
     rel_v : (B,) float64 -- (v - top) / (bottom - top) of the blob's silhouette: 0 at the top
     labels : (H, W) int32 -- 0 none, i + 1 for blob i
+    foreground_share : (B,) float64 or None -- share of the blob's pixels that the background
+        model called foreground (not shadow, before the clean-up); None when not measured.
+        Skin-coloured scenery that a silhouette took in is mostly background, a hand or face
+        mostly is not (docs/blobs.md, "Foreground share")
     """
 
     centroids_px: np.ndarray
@@ -394,6 +398,7 @@ class BlobSet:
     silhouette: np.ndarray
     rel_v: np.ndarray
     labels: np.ndarray
+    foreground_share: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = len(self.centroids_px)
@@ -411,6 +416,9 @@ class BlobSet:
             self.rel_v,
             self.labels,
         )
+        if self.foreground_share is not None:
+            require_shape("foreground_share", self.foreground_share, (n,), np.floating)
+            readonly(self.foreground_share)
 
     def __len__(self) -> int:
         return len(self.centroids_px)

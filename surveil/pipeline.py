@@ -70,6 +70,12 @@ class PipelineConfig:
     carry: CarryConfig = setting(default_factory=CarryConfig, doc="carried objects")
     arms: ArmPoseConfig = setting(default_factory=ArmPoseConfig, doc="arm trackers")
 
+    def background_requests(self) -> dict[str, bool]:
+        """What the later stages need from ``BackgroundModel.step`` besides the silhouettes."""
+        return self.blobs.background_requests(
+            foreground_share=self.candidates.min_pair_foreground_share > 0
+        )
+
 
 def load_pipeline_config(path: Path | None) -> PipelineConfig:
     """The defaults, overridden by the TOML file ``path`` (unknown keys and bad values fail
@@ -212,7 +218,7 @@ class Pipeline:
             t0 = time.perf_counter()
             silhouettes = bg.step(
                 img,
-                **self.cfg.blobs.background_requests(),
+                **self.cfg.background_requests(),
                 people_px=self._people_px(cam),
             )
             t1 = time.perf_counter()

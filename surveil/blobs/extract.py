@@ -374,6 +374,7 @@ def extract_blobs(
         crop.silhouette,
         crop.rel_v,
         labels,
+        crop.foreground_share,
     )
 
 
@@ -458,11 +459,11 @@ def _extract(
                 areas = stats[1:, cv2.CC_STAT_AREA].astype(np.int64)
                 ok = np.flatnonzero(areas >= max(cfg.min_blob_area_px, 1))
         ok = ok[areas[ok] <= limit]
-    if cfg.min_foreground_share > 0 and silhouettes.foreground is not None and len(ok):
-        ok = ok[
-            foreground_share(labels, silhouettes.foreground, n_all)[ok + 1]
-            >= cfg.min_foreground_share
-        ]
+    shares = None
+    if silhouettes.foreground is not None:
+        shares = foreground_share(labels, silhouettes.foreground, n_all)
+        if cfg.min_foreground_share > 0 and len(ok):
+            ok = ok[shares[ok + 1] >= cfg.min_foreground_share]
     edges = silhouettes.background_edges
     if cfg.ghost_edge_ratio > 0 and edges is not None and bgr is not None and len(ok):
         ghosts = revealed_background(
@@ -520,6 +521,7 @@ def _extract(
         sil_of,
         rel_v,
         out_labels[labels],
+        None if shares is None else shares[comp],
     )
 
 

@@ -239,10 +239,11 @@ class BlobConfig:
         min=0.0,
     )
 
-    def background_requests(self) -> dict[str, bool]:
-        """What this stage needs from ``BackgroundModel.step`` besides the silhouettes."""
+    def background_requests(self, foreground_share: bool = False) -> dict[str, bool]:
+        """What this stage needs from ``BackgroundModel.step`` besides the silhouettes
+        (``foreground_share``: a later stage reads ``BlobSet.foreground_share``)."""
         return {
             "changed": self.change_dilate_px >= 0,
-            "foreground": self.min_foreground_share > 0,
+            "foreground": foreground_share or self.min_foreground_share > 0,
             "background_edges": self.ghost_edge_ratio > 0,
         }

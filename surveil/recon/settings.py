@@ -54,6 +54,14 @@ class CandidateConfig:
     min_z_m: float = setting(
         -0.05, "candidates below this height (under the floor) are dropped, m", max=0.0
     )
+    min_pair_foreground_share: float = setting(
+        0.2,
+        "a blob pair is dropped when neither blob has this share of its pixels foreground to "
+        "the background model (docs/candidates.md, 'Scenery pairs'): lines of sight through "
+        "skin-coloured scenery inside silhouettes. 0 = off",
+        min=0.0,
+        max=1.0,
+    )
     explain_away: bool = setting(
         True,
         "drop ghosts: a candidate whose blobs are mostly claimed by better-supported ones "
