@@ -136,6 +136,29 @@ def test_the_distance_cap_follows_the_settings_that_read_the_distances():
     assert silhouette_distance_cap_px(never) is None
 
 
+def test_the_foreground_mask_is_asked_for_by_whichever_stage_reads_it(small_recording):
+    from surveil.blobs.settings import BlobConfig
+    from surveil.recon.settings import CandidateConfig
+
+    def wants(cfg: PipelineConfig) -> bool:
+        return cfg.background_requests()["foreground"]
+
+    off = CandidateConfig(min_pair_foreground_share=0.0)
+    assert wants(PipelineConfig())  # the candidate stage's pair test
+    assert not wants(PipelineConfig(candidates=off))
+    assert wants(PipelineConfig(candidates=off, blobs=BlobConfig(min_foreground_share=0.1)))
+    # and the blobs of a run carry their shares
+    rec = open_recording(small_recording)
+    pipeline = Pipeline.for_recording(rec, PipelineConfig(), load_rules())
+    shares = [
+        obs.blobs.foreground_share
+        for fs in rec.framesets(stop=40)
+        for obs in pipeline.step(fs).observations.values()
+        if len(obs.blobs)
+    ]
+    assert shares and all(s is not None and np.all((s >= 0) & (s <= 1)) for s in shares)
+
+
 def test_arm_trackers_feed_the_hands_no_two_views_see(small_recording):
     """With ``[arms] enabled`` and ``feed_candidates`` the arms run before the candidates,
     one pose per tracked person, and their hands join the candidates only where no camera

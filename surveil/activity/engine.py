@@ -118,6 +118,14 @@ class _StillEpisode:
     apart_ns: int | None = None
 
 
+def _heir(cur: _Frame, label: str, lost_id: int) -> TargetSnapshot | None:
+    """The tracker other than ``lost_id`` that holds ``label`` in the normal state now."""
+    for snap in cur.targets.values():
+        if snap.target_id != lost_id and snap.phase is Phase.NORMAL and snap.label == label:
+            return snap
+    return None
+
+
 def _person(label: str) -> int:
     return parse_label(label)[0]
 
@@ -713,6 +721,22 @@ class ActivityEngine:
         for key, st in list(self._stills.items()):
             th = st.rule.thresholds
             snap = cur.targets.get(st.hand_id)
+            if snap is None or snap.phase is Phase.LOST:
+                heir = _heir(cur, st.label, st.hand_id)
+                if heir is not None:
+                    # the tracker passed its hand's slot on (the hand came back elsewhere):
+                    # the label is the hand, so its new tracker carries the episode on
+                    log.debug(
+                        "%s: %s goes on with t%d (t%d lost)",
+                        st.rule.rule_id,
+                        st.label,
+                        heir.target_id,
+                        st.hand_id,
+                    )
+                    del self._stills[key]
+                    key = (key[0], heir.target_id)
+                    self._stills[key] = st
+                    st.hand_id, snap = heir.target_id, heir
             if st.apart_ns is None and snap is not None:
                 if float(np.linalg.norm(snap.mean_m - st.point_m)) >= th.separation_m:
                     st.apart_ns = t

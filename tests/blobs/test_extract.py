@@ -232,8 +232,13 @@ def test_a_blob_mostly_not_foreground_is_scenery_and_dropped():
     cfg = BlobConfig(min_blob_area_px=1, silhouette_dilate_px=0, max_blob_area_rel=0.0)
     kept = extract_blobs(skin, sil, dataclasses.replace(cfg, min_foreground_share=0.2))
     assert kept.centroids_px.tolist() == [[34.5, 64.5]] and kept.areas_px.tolist() == [100]
-    assert len(extract_blobs(skin, sil, cfg)) == 2  # 0: no such test
+    every = extract_blobs(skin, sil, cfg)  # 0: no such test
+    assert len(every) == 2
+    # each blob's share is reported for the candidate stage (table edge 200 px, hand 100 px)
+    assert every.foreground_share.tolist() == [0.0, 0.5]
     assert len(extract_blobs(skin, sil, dataclasses.replace(cfg, min_foreground_share=0.6))) == 0
+    unmeasured = extract_blobs(skin, dataclasses.replace(sil, foreground=None), cfg)
+    assert unmeasured.foreground_share is None
 
 
 def _table_with_ghost_and_hand():

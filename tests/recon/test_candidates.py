@@ -65,6 +65,7 @@ def _observation(
     *,
     rel_v: np.ndarray | None = None,
     silhouette_at_m: np.ndarray | None = None,
+    foreground_share: np.ndarray | None = None,
 ) -> CameraObservation:
     """Blobs at the projections of ``points_m``; silhouettes are disks around the projections
     of ``silhouette_at_m`` (default: the blob points). rel_v defaults to a function of height,
@@ -81,6 +82,7 @@ def _observation(
         silhouette=np.ones(n, np.int32),
         rel_v=rel,
         labels=np.zeros((H, W), np.int32),
+        foreground_share=foreground_share,
     )
     return CameraObservation(cam.name, _silhouettes(sil_px), np.zeros((H, W), bool), blobs)
 
@@ -131,6 +133,33 @@ def test_crossing_lines_of_sight_of_two_limbs_are_explained_away(enabled):
     to_ghost = np.linalg.norm(cs.points_m - g, axis=1)
     assert (to_limb < 1e-3).sum() >= 2  # both limbs found either way
     assert (to_ghost < 0.01).any() != enabled
+
+
+@pytest.mark.parametrize("threshold", [CFG.min_pair_foreground_share, 0.0])
+@pytest.mark.parametrize("measured", [True, False])
+def test_a_pair_of_scenery_blobs_is_dropped_a_camouflaged_hand_is_not(threshold, measured):
+    rig = _rig()
+    hand = np.array([3.2, 1.8, 0.95])  # on a wooden table: mostly background to cam0
+    scenery = np.array([2.7, 2.3, 0.7])  # a table edge inside the silhouette, cams 0 and 1
+    shares = {"cam0": [0.1, 0.05], "cam1": [0.8, 0.1], "cam2": [0.9], "cam3": [0.7]}
+    obs = []
+    for m, cam in enumerate(rig):
+        points = np.stack([hand, scenery]) if m < 2 else hand[None]
+        share = np.array(shares[cam.name]) if measured else None
+        obs.append(
+            _observation(
+                cam,
+                points,
+                silhouette_at_m=np.stack([hand, scenery]),  # one person around both
+                foreground_share=share,
+            )
+        )
+    cfg = dataclasses.replace(CFG, min_pair_foreground_share=threshold)
+    cs = make_candidates(obs, rig, cfg)
+    assert np.linalg.norm(cs.points_m - hand, axis=1).min() < 1e-6
+    scenery_kept = np.linalg.norm(cs.points_m - scenery, axis=1).min() < 1e-6
+    # an unmeasured share counts as foreground
+    assert scenery_kept == (threshold == 0 or not measured)
 
 
 def test_expected_position_spares_the_dropped_candidate_next_to_it():
