@@ -24,9 +24,12 @@ below its shoulder and at least ``min_reach_m`` from its head horizontally
 (:func:`~.predicates.away_from_body`; heads are taken from the same person's ``pN/head``
 target), with no other target within ``coincidence_m``, after a reach (it was ``separation_m``
 or more from the still point at most ``max_approach_s`` before): the ballistic reach-stop of
-§7.3.1. Climax = the moment the hand stopped; "before" = the carry estimate at the start of the
-reach; "after" = the estimate ``separation_delay_s`` after the hand is ``separation_m`` from the
-still point again (the return), or at ``separation_timeout_s`` after the stop was detected.
+§7.3.1. Climax = the middle of the stop (from the moment the hand stopped to the last time it
+was seen within ``separation_m / 2`` of the point); "before" = the carry estimate at the start
+of the reach; "after" = the estimate ``separation_delay_s`` after the hand is ``separation_m``
+from the still point again (the return), or at ``separation_timeout_s`` after the stop was
+detected or the hand was last at its point, whichever is later. When the hand's tracker is
+lost and another takes its label, the episode goes on with that tracker.
 At the step where the hand is ``separation_m`` from the still point, its id is listed in
 :attr:`ActivityEngine.released_hands`: the pipeline
 restarts its carry window (:meth:`~surveil.carry.CarryAnalyser.restart`), as the carry stage
