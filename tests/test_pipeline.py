@@ -143,13 +143,13 @@ def test_the_foreground_mask_is_asked_for_by_whichever_stage_reads_it(small_reco
     def wants(cfg: PipelineConfig) -> bool:
         return cfg.background_requests()["foreground"]
 
-    off = CandidateConfig(min_pair_foreground_share=0.0)
-    assert wants(PipelineConfig())  # the candidate stage's pair test
-    assert not wants(PipelineConfig(candidates=off))
-    assert wants(PipelineConfig(candidates=off, blobs=BlobConfig(min_foreground_share=0.1)))
-    # and the blobs of a run carry their shares
+    pairs = CandidateConfig(min_pair_foreground_share=0.2)
+    assert not wants(PipelineConfig())  # both tests are off by default: no mask, no cost
+    assert wants(PipelineConfig(candidates=pairs))  # the candidate stage's pair test
+    assert wants(PipelineConfig(blobs=BlobConfig(min_foreground_share=0.1)))
+    # and the blobs of such a run carry their shares
     rec = open_recording(small_recording)
-    pipeline = Pipeline.for_recording(rec, PipelineConfig(), load_rules())
+    pipeline = Pipeline.for_recording(rec, PipelineConfig(candidates=pairs), load_rules())
     shares = [
         obs.blobs.foreground_share
         for fs in rec.framesets(stop=40)

@@ -24,12 +24,11 @@ below its shoulder and at least ``min_reach_m`` from its head horizontally
 (:func:`~.predicates.away_from_body`; heads are taken from the same person's ``pN/head``
 target), with no other target within ``coincidence_m``, after a reach (it was ``separation_m``
 or more from the still point at most ``max_approach_s`` before): the ballistic reach-stop of
-§7.3.1. Climax = the middle of the stop (from the moment the hand stopped to the last time it
-was seen within ``separation_m / 2`` of the point); "before" = the carry estimate at the start
-of the reach; "after" = the estimate ``separation_delay_s`` after the hand is ``separation_m``
-from the still point again (the return), or at ``separation_timeout_s`` after the stop was
-detected or the hand was last at its point, whichever is later. When the hand's tracker is
-lost and another takes its label, the episode goes on with that tracker.
+§7.3.1. Climax = the moment the hand stopped; "before" = the carry estimate at the start of the
+reach; "after" = the estimate ``separation_delay_s`` after the hand is ``separation_m`` from the
+still point again (the return), or at ``separation_timeout_s`` after the stop was detected.
+When the hand's tracker is lost and another takes its label, the episode goes on with that
+tracker.
 At the step where the hand is ``separation_m`` from the still point, its id is listed in
 :attr:`ActivityEngine.released_hands`: the pipeline
 restarts its carry window (:meth:`~surveil.carry.CarryAnalyser.restart`), as the carry stage
@@ -119,7 +118,6 @@ class _StillEpisode:
     point_m: np.ndarray
     before: CarryEstimate | None
     apart_ns: int | None = None
-    near_ns: int = 0  # the last time the hand was seen (normal) at the point
 
 
 def _heir(cur: _Frame, label: str, lost_id: int) -> TargetSnapshot | None:
@@ -742,21 +740,16 @@ class ActivityEngine:
                     self._stills[key] = st
                     st.hand_id, snap = heir.target_id, heir
             if st.apart_ns is None and snap is not None:
-                off = float(np.linalg.norm(snap.mean_m - st.point_m))
-                if off >= th.separation_m:
+                if float(np.linalg.norm(snap.mean_m - st.point_m)) >= th.separation_m:
                     st.apart_ns = t
                     if st.hand_id not in self._released:
                         self._released.append(st.hand_id)
-                elif off <= 0.5 * th.separation_m and snap.phase is Phase.NORMAL:
-                    st.near_ns = t
             ready = (
                 st.apart_ns is not None
                 and t - st.apart_ns >= _ns(th.separation_delay_s)
                 and self._after_known(st.rule, [self._carry_since(st.hand_id, t, st.apart_ns)])
             )
-            # a hand that stays at its point (a place that hovers before setting down) is
-            # waited for: the timeout runs from when it was last seen there
-            timed_out = t - max(st.detected_ns, st.near_ns) >= _ns(th.separation_timeout_s)
+            timed_out = t - st.detected_ns >= _ns(th.separation_timeout_s)
             if ready or timed_out:
                 ev = self._decide_still(st, cur, timed_out=not ready)
                 events += [ev] if ev else []
@@ -791,15 +784,11 @@ class ActivityEngine:
                     cur.t_ns,
                 )
                 return None
-        # the grasp or release happens somewhere in the stop, which the hand's motion does
-        # not show: the middle of the stop is at most half of it off (the bundled scenes'
-        # hands hover up to 1.9 s, then set down 1.2 s after they stopped)
-        climax = (st.climax_ns + max(st.near_ns, st.climax_ns)) // 2
         return ActivityEvent(
             activity=rule.name,
-            start_ns=min(st.start_ns, climax),
-            climax_ns=climax,
-            end_ns=max(cur.t_ns, climax),
+            start_ns=min(st.start_ns, st.climax_ns),
+            climax_ns=st.climax_ns,
+            end_ns=max(cur.t_ns, st.climax_ns),
             actors=(st.label,),
             persons=_persons((st.label,)),
             rule=rule.rule_id,

@@ -82,8 +82,7 @@ class Thresholds:
     )
     separation_timeout_s: float = setting(
         2.0,
-        "decide anyway this long after the separation (pick/place: after the stop was detected "
-        "or the hand was last at its point), s",
+        "decide anyway this long after the separation (pick/place: after the still moment), s",
         min=0.0,
         max=60.0,
     )

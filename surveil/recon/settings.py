@@ -55,10 +55,11 @@ class CandidateConfig:
         -0.05, "candidates below this height (under the floor) are dropped, m", max=0.0
     )
     min_pair_foreground_share: float = setting(
-        0.2,
+        0.0,
         "a blob pair is dropped when neither blob has this share of its pixels foreground to "
         "the background model (docs/candidates.md, 'Scenery pairs'): lines of sight through "
-        "skin-coloured scenery inside silhouettes. 0 = off",
+        "skin-coloured scenery inside silhouettes. 0 = off; 0.2 cleans the tracks where "
+        "furniture is skin-coloured",
         min=0.0,
         max=1.0,
     )

@@ -135,7 +135,7 @@ def test_crossing_lines_of_sight_of_two_limbs_are_explained_away(enabled):
     assert (to_ghost < 0.01).any() != enabled
 
 
-@pytest.mark.parametrize("threshold", [CFG.min_pair_foreground_share, 0.0])
+@pytest.mark.parametrize("threshold", [0.2, 0.0])
 @pytest.mark.parametrize("measured", [True, False])
 def test_a_pair_of_scenery_blobs_is_dropped_a_camouflaged_hand_is_not(threshold, measured):
     rig = _rig()
