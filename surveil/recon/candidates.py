@@ -329,7 +329,7 @@ def make_candidates(
     seen = sorted(m for m, obs in by_cam.items() if len(obs.blobs) > 0)
     if len(seen) < 2:
         return _empty()
-    origins, dirs, rel_v, rows, cam_of, blob_of, shares = [], [], [], [], [], [], []
+    origins, dirs, rel_v, rows, cam_of, blob_of = [], [], [], [], [], []
     for m in seen:
         blobs = by_cam[m].blobs
         origin, d = rig.cameras[m].backproject(blobs.centroids_px)
@@ -337,8 +337,6 @@ def make_candidates(
         origins.append(np.broadcast_to(origin, (n, 3)))
         dirs.append(d)
         rel_v.append(blobs.rel_v)
-        # a blob whose share was not measured counts as moving
-        shares.append(np.ones(n) if blobs.foreground_share is None else blobs.foreground_share)
         rows.append(np.column_stack(blob_rows(by_cam[m])))
         cam_of.append(np.full(n, m, dtype=np.int64))
         blob_of.append(np.arange(n, dtype=np.int64))
@@ -348,7 +346,6 @@ def make_candidates(
     rows_all = np.concatenate(rows)
     cam_all = np.concatenate(cam_of)
     blob_all = np.concatenate(blob_of)
-    share_all = np.concatenate(shares)
     starts = np.cumsum([0] + [len(d) for d in dirs])
 
     # eq. 18: every blob pair of every camera pair m < m' (global blob indices ia, ib)
@@ -378,7 +375,14 @@ def make_candidates(
     if cfg.min_pair_foreground_share > 0:
         # two lines of sight through skin-coloured scenery (a wooden table's edge that the
         # silhouettes took in, seen from two sides) cross somewhere near the person; a real
-        # limb is foreground in at least one of the two views
+        # limb is foreground in at least one of the two views. A blob whose share was not
+        # measured counts as foreground.
+        share_all = np.concatenate(
+            [
+                np.ones(len(b)) if b.foreground_share is None else b.foreground_share
+                for b in (by_cam[m].blobs for m in seen)
+            ]
+        )
         keep &= np.maximum(share_all[ia], share_all[ib]) >= cfg.min_pair_foreground_share
     ia, ib, points, half_gap, p_t = ia[keep], ib[keep], points[keep], half_gap[keep], p_t[keep]
     if cfg.rel_v_to_floor:
