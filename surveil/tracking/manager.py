@@ -95,6 +95,8 @@ class _Track:
     since_miss: int = 1 << 30  # frame sets since the last unsupported one
     level: float = 0.0
     lost_since_ns: int | None = None
+    # its person's head (estimate) when it was last supported before it was lost
+    lost_head_m: np.ndarray | None = None
     ever_labelled: bool = False
     # it lost a hand slot in a contest and has not been labelled since: judged a ghost
     demoted: bool = False
@@ -809,7 +811,7 @@ class MultiTargetTracker:
         lost = [tr for tr in self._tracks.values() if tr.phase is Phase.LOST]
         if not lost or not seeds:
             return {}
-        last = np.array([tr.last_good_m for tr in lost])
+        last = np.array([self._lost_prior_m(tr) for tr in lost])
         sp = np.array([sd.position_m for sd in seeds])
         confirmed = np.array([sd.count >= lc.init_confirm_frames for sd in seeds])
         d = np.linalg.norm(last[:, None] - sp[None], axis=2)
@@ -819,6 +821,39 @@ class MultiTargetTracker:
         cost = np.where(ok, d, 1e6)
         rows, cols = linear_sum_assignment(cost)
         return {lost[r].id: int(c) for r, c in zip(rows, cols, strict=True) if cost[r, c] < 1e6}
+
+    def _lost_prior_m(self, tr: _Track) -> np.ndarray:
+        """Where a lost target is looked for: its last supported position, moved horizontally
+        with its person's head since then for a hand (``reacquire_with_body``) whose head is
+        tracked; a hand cannot stay behind a body that walks off."""
+        head = self._with_body(tr)
+        if head is None or tr.lost_head_m is None:
+            return tr.last_good_m
+        shift = head.mean_m - tr.lost_head_m
+        shift[2] = 0.0
+        return tr.last_good_m + shift
+
+    def _with_body(self, tr: _Track) -> _Track | None:
+        """The tracked head of a hand's person (``reacquire_with_body``), else None. Such a
+        hand, while lost, is hidden rather than gone: it is looked for around its body and
+        not retired (its slot goes to a new tracker after ``yield_lost_s``)."""
+        if not (self.cfg.lifecycle.reacquire_with_body and tr.limb.is_hand and tr.person > 0):
+            return None
+        p = self._persons.get(tr.person)
+        head = self._tracks.get(p.head_id) if p is not None and p.head_id is not None else None
+        return head if head is not None and head.phase in ACTIVE else None
+
+    def _head_when(self, person: int, t_ns: int) -> np.ndarray | None:
+        """A person's head estimate at ``t_ns`` (the latest one at or before it that the head
+        tracker's history holds; its current one if the history starts later), or None."""
+        p = self._persons.get(person)
+        head = self._tracks.get(p.head_id) if p is not None and p.head_id is not None else None
+        if head is None:
+            return None
+        for ht, hm in reversed(head.history):
+            if ht <= t_ns:
+                return hm.copy()
+        return head.mean_m.copy()
 
     def _reacquire_gate_m(self, unseen_s: float | np.ndarray) -> float | np.ndarray:
         """How far from its last position a lost target may be re-acquired after ``unseen_s``:
@@ -1355,7 +1390,7 @@ class MultiTargetTracker:
                 labelled=tr.labelled,
                 reacquired=tr.id in reacquired or tr.id in merged,
                 lost_for_s=(t_ns - tr.lost_since_ns) * 1e-9
-                if tr.lost_since_ns is not None
+                if tr.lost_since_ns is not None and not self._with_body(tr)
                 else 0.0,
                 ever_labelled=tr.ever_labelled,
                 label_revoked=tr.phase is Phase.NORMAL and not tr.labelled,
@@ -1422,6 +1457,7 @@ class MultiTargetTracker:
             if new is Phase.LOST:
                 tr.lost_since_ns = t_ns
                 tr.mean_m = tr.last_good_m.copy()
+                tr.lost_head_m = self._head_when(tr.person, tr.last_good_ns)
                 tr.misses = 0
             elif old is Phase.LOST and new is Phase.UNLABELLED:
                 if tid in merged:
@@ -1602,7 +1638,7 @@ class MultiTargetTracker:
         """Tracker ``tid`` as written out, ``dt_s`` after its estimate (constant velocity;
         a lost tracker stays at its last good position)."""
         if tr.phase is Phase.LOST:
-            mean = tr.last_good_m.copy()
+            mean = self._lost_prior_m(tr).copy()
         else:
             mean = tr.mean_m + tr.vel_mps * dt_s
         if tr.limb is Limb.HEAD:

@@ -208,6 +208,12 @@ class LifecycleConfig:
         0.5, "the re-acquisition gate grows by this per second lost, m/s", min=0.0
     )
     reacquire_max_m: float = setting(0.8, "the re-acquisition gate never exceeds this, m", min=0.0)
+    reacquire_with_body: bool = setting(
+        True,
+        "a lost hand of a person whose head is tracked is re-acquired around its last position "
+        "moved (horizontally) as far as the head moved since: a hand goes where its body goes "
+        "(a person who walks off carrying a box hidden from all but one camera)",
+    )
     merge_lost_s: float = setting(
         0.6,
         "a hand of a person lost at most this long is re-acquired onto another person's hand "

@@ -809,9 +809,10 @@ def test_a_still_hand_that_loses_its_candidate_beside_another_has_not_met_it(
 def test_hands_lost_while_their_person_walks_away_give_their_slots_to_new_trackers(
     rig, rng, yield_s
 ):
-    """A person's hands lose their candidates (carrying a box against the body) while the
-    head walks 1.5 m away in 2 s; the hands show again at the new place, far outside the lost
-    trackers' re-acquisition gate, so new trackers start there. The lost hands give their
+    """Without ``reacquire_with_body``: a person's hands lose their candidates (carrying a
+    box against the body) while the head walks 1.5 m away in 2 s; the hands show again at
+    the new place, far outside the lost trackers' re-acquisition gate, so new trackers start
+    there. The lost hands give their
     slots to them after yield_lost_s and are retired: the new trackers become p1's hands.
     With 0 (never), the lost hands hold the slots until they retire (retire_s, 3 s) and the
     new trackers stay unlabelled."""
@@ -821,7 +822,10 @@ def test_hands_lost_while_their_person_walks_away_give_their_slots_to_new_tracke
     for u in (1 - np.cos(np.pi * np.linspace(0, 1, 31)[1:])) / 2:  # 2 s, at most 1.2 m/s
         frames.append([a["head"] + u * shift])
     frames += [[a["head"] + shift, a["left_hand"] + shift, a["right_hand"] + shift]] * 12
-    cfg = TrackingConfig(labelling=LabellingConfig(yield_lost_s=yield_s))
+    cfg = TrackingConfig(
+        labelling=LabellingConfig(yield_lost_s=yield_s),
+        lifecycle=LifecycleConfig(reacquire_with_body=False),
+    )
     out = run(MultiTargetTracker(cfg, rig, seed=14), frames, rng)
     assert _owner_of(out[39], a["right_hand"]) == "p1/right_hand"
     last = out[-1]
@@ -831,6 +835,46 @@ def test_hands_lost_while_their_person_walks_away_give_their_slots_to_new_tracke
         assert len(last.targets) == 3  # the lost trackers are retired
     else:
         assert not _owner_of(last, a["right_hand"] + shift).startswith("p1/")
+
+
+def _walk_hidden(a: dict, shift: np.ndarray, hidden_frames: int) -> list[list[np.ndarray]]:
+    """Head and hands seen for 40 frame sets; then the head alone walks ``shift`` in 30
+    (2 s) and stands ``hidden_frames - 30`` more; then all three are seen there for 12."""
+    frames = [[a["head"], a["left_hand"], a["right_hand"]] for _ in range(40)]
+    for u in (1 - np.cos(np.pi * np.linspace(0, 1, 31)[1:])) / 2:  # at most 1.2 m/s
+        frames.append([a["head"] + u * shift])
+    frames += [[a["head"] + shift]] * (hidden_frames - 30)
+    frames += [[a["head"] + shift, a["left_hand"] + shift, a["right_hand"] + shift]] * 12
+    return frames
+
+
+@pytest.mark.parametrize("hidden_frames", [30, 75])
+def test_hands_hidden_while_their_person_walks_away_are_reacquired_where_the_body_went(
+    rig, rng, hidden_frames
+):
+    """The walk of the test above, but hands that follow their body: the lost hands are
+    looked for around their last positions moved as far as the head moved, so the trackers
+    that lost them re-acquire them at the new place; their ids (and with them the carry
+    window and the activity history) survive. Hidden for 5 s, longer than ``retire_s``
+    (3 s), they are still kept: a tracked person's hand is hidden, not gone. While lost
+    they are reported where the body took them."""
+    a = body((1.5, 2.0), 0.0)
+    shift = np.array([1.5, 0.0, 0.0])
+    out = run(
+        MultiTargetTracker(TrackingConfig(), rig, seed=14),
+        _walk_hidden(a, shift, hidden_frames),
+        rng,
+    )
+    ids = {s.label: s.target_id for s in out[39].targets}
+    assert set(ids) == {"p1/head", "p1/left_hand", "p1/right_hand"}
+    hidden = {s.label: s for s in out[40 + hidden_frames - 1].targets}
+    assert hidden["p1/right_hand"].phase is Phase.LOST
+    moved = a["right_hand"] + shift
+    assert np.linalg.norm(hidden["p1/right_hand"].mean_m[:2] - moved[:2]) < 0.1
+    last = out[-1]
+    assert {s.label: s.target_id for s in last.targets} == ids
+    assert _owner_of(last, a["left_hand"] + shift) == "p1/left_hand"
+    assert _owner_of(last, moved) == "p1/right_hand"
 
 
 def _noisy_set(rng, points, priors) -> CandidateSet:
