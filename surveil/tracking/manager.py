@@ -764,10 +764,14 @@ class MultiTargetTracker:
             return None
         return np.array(heads)
 
+    def _head_track(self, person: int) -> _Track | None:
+        """The tracker of a person's head (None: no such person or head)."""
+        p = self._persons.get(person)
+        return self._tracks.get(p.head_id) if p is not None and p.head_id is not None else None
+
     def _head_m(self, person: int) -> np.ndarray | None:
         """Where a person's head is: its tracker's estimate, or its last good one while lost."""
-        p = self._persons.get(person)
-        head = self._tracks.get(p.head_id) if p is not None and p.head_id is not None else None
+        head = self._head_track(person)
         if head is None:
             return None
         return head.mean_m if head.phase in ACTIVE else head.last_good_m
@@ -839,15 +843,13 @@ class MultiTargetTracker:
         not retired (its slot goes to a new tracker after ``yield_lost_s``)."""
         if not (self.cfg.lifecycle.reacquire_with_body and tr.limb.is_hand and tr.person > 0):
             return None
-        p = self._persons.get(tr.person)
-        head = self._tracks.get(p.head_id) if p is not None and p.head_id is not None else None
+        head = self._head_track(tr.person)
         return head if head is not None and head.phase in ACTIVE else None
 
     def _head_when(self, person: int, t_ns: int) -> np.ndarray | None:
         """A person's head estimate at ``t_ns`` (the latest one at or before it that the head
         tracker's history holds; its current one if the history starts later), or None."""
-        p = self._persons.get(person)
-        head = self._tracks.get(p.head_id) if p is not None and p.head_id is not None else None
+        head = self._head_track(person)
         if head is None:
             return None
         for ht, hm in reversed(head.history):
@@ -1636,7 +1638,7 @@ class MultiTargetTracker:
 
     def _snapshot(self, tid: int, tr: _Track, dt_s: float) -> TargetSnapshot:
         """Tracker ``tid`` as written out, ``dt_s`` after its estimate (constant velocity;
-        a lost tracker stays at its last good position)."""
+        a lost tracker where it is looked for, :meth:`_lost_prior_m`)."""
         if tr.phase is Phase.LOST:
             mean = self._lost_prior_m(tr).copy()
         else:

@@ -211,8 +211,9 @@ class LifecycleConfig:
     reacquire_with_body: bool = setting(
         True,
         "a lost hand of a person whose head is tracked is re-acquired around its last position "
-        "moved (horizontally) as far as the head moved since: a hand goes where its body goes "
-        "(a person who walks off carrying a box hidden from all but one camera)",
+        "moved (horizontally) as far as the head moved since, and is not retired after "
+        "retire_s while the head is tracked: a hand goes where its body goes (a person who "
+        "walks off carrying a box hidden from all but one camera)",
     )
     merge_lost_s: float = setting(
         0.6,
