@@ -1392,7 +1392,7 @@ class MultiTargetTracker:
                 labelled=tr.labelled,
                 reacquired=tr.id in reacquired or tr.id in merged,
                 lost_for_s=(t_ns - tr.lost_since_ns) * 1e-9
-                if tr.lost_since_ns is not None and not self._with_body(tr)
+                if tr.lost_since_ns is not None and self._with_body(tr) is None
                 else 0.0,
                 ever_labelled=tr.ever_labelled,
                 label_revoked=tr.phase is Phase.NORMAL and not tr.labelled,
