@@ -822,9 +822,33 @@ class MultiTargetTracker:
         lost_s = np.array([(t_ns - (tr.lost_since_ns or t_ns)) * 1e-9 for tr in lost])
         gate = self._reacquire_gate_m(lost_s)
         ok = (d <= gate[:, None]) & (confirmed[None] | (d <= lc.reacquire_near_m))
+        if lc.reacquire_own_body:
+            ok &= ~self._claimed_by_others(lost, sp)
         cost = np.where(ok, d, 1e6)
         rows, cols = linear_sum_assignment(cost)
         return {lost[r].id: int(c) for r, c in zip(rows, cols, strict=True) if cost[r, c] < 1e6}
+
+    def _claimed_by_others(self, lost: list[_Track], points_m: np.ndarray) -> np.ndarray:
+        """(L, S) bool: seed s lies where another person's tracked head claims a hand, for
+        each lost hand whose own head is tracked (``reacquire_own_body``): that head is nearer
+        to it than the hand's own by at least ``labelling.person_margin_m``, the margin by
+        which labelling gives a hand to a person. False for other lost targets."""
+        out = np.zeros((len(lost), len(points_m)), bool)
+        heads = {}
+        for person in self._persons:
+            head = self._head_track(person)
+            if head is not None and head.phase in ACTIVE:
+                heads[person] = head.mean_m
+        margin = self.cfg.labelling.person_margin_m
+        for i, tr in enumerate(lost):
+            own = heads.get(tr.person) if tr.limb.is_hand else None
+            others = [m for person, m in heads.items() if person != tr.person]
+            if own is None or not others:
+                continue
+            to_own = np.linalg.norm(points_m - own, axis=1)
+            to_other = np.linalg.norm(points_m[:, None] - np.array(others)[None], axis=2)
+            out[i] = to_other.min(axis=1) + margin <= to_own
+        return out
 
     def _lost_prior_m(self, tr: _Track) -> np.ndarray:
         """Where a lost target is looked for: its last supported position, moved horizontally

@@ -215,6 +215,13 @@ class LifecycleConfig:
         "retire_s while the head is tracked: a hand goes where its body goes (a person who "
         "walks off carrying a box hidden from all but one camera)",
     )
+    reacquire_own_body: bool = setting(
+        True,
+        "a lost hand of a person whose head is tracked is not re-acquired by a candidate that "
+        "another tracked head claims (nearer to it by labelling.person_margin_m than to the "
+        "hand's own head): a hand hidden while two people's hands met must not come back on "
+        "the other person's hand",
+    )
     merge_lost_s: float = setting(
         0.6,
         "a hand of a person lost at most this long is re-acquired onto another person's hand "

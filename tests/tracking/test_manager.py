@@ -1171,3 +1171,31 @@ def test_hands_held_near_each_other_that_never_met_are_parted_where_they_were(ri
     else:
         assert not parts
         assert all(s.phase is Phase.COMBINED for s in out[-1].targets if "right" in s.label)
+
+
+@pytest.mark.parametrize("own_body", [True, False])
+def test_a_lost_hand_is_not_reacquired_on_another_persons_body(rig, rng, own_body):
+    """b holds its right hand out towards a, where it goes unseen for 1 s (in the exchange
+    scene, seed 0, the taker's hand was hidden by the ball and the giver's). Then something
+    shows at a's chest, 0.36 m from where b's hand was lost: inside the re-acquisition gate
+    (0.75 m after 1 s), but a's head is nearer to it than b's by more than the labelling's
+    person margin. b's lost hand must not come back there (it came back on the giver's hand
+    and took the taker's label to the other body); with the setting off it does."""
+    a, b = body((2.0, 2.0), 0.0), body((2.9, 2.0), 180.0)
+    out_m = np.array([2.55, 2.1, 1.05])
+    at_a = np.array([2.2, 1.95, 1.1])
+    still = [a["head"], a["left_hand"], a["right_hand"], b["head"], b["left_hand"]]
+    frames = [[*still, b["right_hand"]] for _ in range(45)]
+    frames += [
+        [*still, b["right_hand"] + u * (out_m - b["right_hand"])] for u in np.linspace(0, 1, 9)[1:]
+    ]
+    frames += [still] * 15 + [[*still, at_a]] * 15
+    cfg = TrackingConfig(lifecycle=LifecycleConfig(reacquire_own_body=own_body))
+    out = run(MultiTargetTracker(cfg, rig, seed=5), frames, rng)
+    b_hand = next(s for s in out[52].targets if np.linalg.norm(s.mean_m - out_m) < 0.1)
+    assert b_hand.label.endswith("/right_hand")
+    last = {s.target_id: s for s in out[-1].targets}
+    came_back = b_hand.target_id in last and (
+        np.linalg.norm(last[b_hand.target_id].mean_m - at_a) < 0.1
+    )
+    assert came_back is not own_body
