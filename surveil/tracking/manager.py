@@ -769,6 +769,11 @@ class MultiTargetTracker:
         p = self._persons.get(person)
         return self._tracks.get(p.head_id) if p is not None and p.head_id is not None else None
 
+    def _active_head(self, person: int) -> _Track | None:
+        """The tracker of a person's head if it is tracked now (not lost), else None."""
+        head = self._head_track(person)
+        return head if head is not None and head.phase in ACTIVE else None
+
     def _head_m(self, person: int) -> np.ndarray | None:
         """Where a person's head is: its tracker's estimate, or its last good one while lost."""
         head = self._head_track(person)
@@ -834,11 +839,11 @@ class MultiTargetTracker:
         to it than the hand's own by at least ``labelling.person_margin_m``, the margin by
         which labelling gives a hand to a person. False for other lost targets."""
         out = np.zeros((len(lost), len(points_m)), bool)
-        heads = {}
-        for person in self._persons:
-            head = self._head_track(person)
-            if head is not None and head.phase in ACTIVE:
-                heads[person] = head.mean_m
+        heads = {
+            person: head.mean_m
+            for person in self._persons
+            if (head := self._active_head(person)) is not None
+        }
         margin = self.cfg.labelling.person_margin_m
         for i, tr in enumerate(lost):
             own = heads.get(tr.person) if tr.limb.is_hand else None
@@ -867,8 +872,7 @@ class MultiTargetTracker:
         not retired (its slot goes to a new tracker after ``yield_lost_s``)."""
         if not (self.cfg.lifecycle.reacquire_with_body and tr.limb.is_hand and tr.person > 0):
             return None
-        head = self._head_track(tr.person)
-        return head if head is not None and head.phase in ACTIVE else None
+        return self._active_head(tr.person)
 
     def _head_when(self, person: int, t_ns: int) -> np.ndarray | None:
         """A person's head estimate at ``t_ns`` (the latest one at or before it that the head
@@ -1084,7 +1088,7 @@ class MultiTargetTracker:
 
     def _near_head(self, tr: _Track) -> bool:
         for p in self._persons.values():
-            head = self._tracks.get(p.head_id) if p.head_id is not None else None
+            head = self._head_track(p.number)
             if head is None or head is tr:
                 continue
             dxy = np.linalg.norm(head.last_good_m[:2] - tr.mean_m[:2])
@@ -1328,7 +1332,7 @@ class MultiTargetTracker:
     def _decide_sides(self, t_ns: int) -> None:
         lcfg = self.cfg.labelling
         for p in self._persons.values():
-            head = self._tracks.get(p.head_id) if p.head_id is not None else None
+            head = self._head_track(p.number)
             hands = [self._tracks[h] for h in p.hand_ids if h in self._tracks]
             undecided = [h for h in hands if h.limb is Limb.UNKNOWN]
             if not undecided or head is None:
@@ -1364,7 +1368,7 @@ class MultiTargetTracker:
         if lcfg.lr_revise_evidence <= 0:
             return
         for p in self._persons.values():
-            head = self._tracks.get(p.head_id) if p.head_id is not None else None
+            head = self._head_track(p.number)
             hands = {
                 self._tracks[h].limb: self._tracks[h]
                 for h in p.hand_ids
