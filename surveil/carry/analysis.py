@@ -56,14 +56,14 @@ log = logging.getLogger(__name__)
 
 
 def rim_background_fraction(
-    foreground: np.ndarray, centre_px: np.ndarray, radii_px: np.ndarray, n_samples: int
+    people: np.ndarray, centre_px: np.ndarray, radii_px: np.ndarray, n_samples: int
 ) -> np.ndarray:
     """Share of background pixels on circles around a point (the vector v_c of eq. 28).
 
     Parameters
     ----------
-    foreground : (H, W) bool
-        Silhouette mask (True = person).
+    people : (H, W) bool or integer
+        Silhouette mask or silhouette labels (non-zero = person).
     centre_px : (2,) float
         Circle centre ``(u, v)``.
     radii_px : (R,) float
@@ -82,17 +82,38 @@ def rim_background_fraction(
     >>> bg.round(1).tolist()  # the rim is half in the person
     [0.5]
     """
-    require_shape("foreground", foreground, (None, None), np.bool_)
-    h, w = foreground.shape
+    require_shape("people", people, (None, None), np.generic)
+    h, w = people.shape
     radii = np.asarray(radii_px, np.float64).reshape(-1)
     cos, sin = _unit_circle(n_samples)
     u = np.rint(centre_px[0] + radii[:, None] * cos).astype(np.int64)
     v = np.rint(centre_px[1] + radii[:, None] * sin).astype(np.int64)
     inside = (u >= 0) & (u < w) & (v >= 0) & (v < h)
+    if inside.all():  # the usual case: no masking needed
+        return np.count_nonzero(people[v, u] == 0, axis=1) / n_samples
     bg = np.zeros(u.shape, bool)
-    bg[inside] = ~foreground[v[inside], u[inside]]
+    bg[inside] = people[v[inside], u[inside]] == 0
     n_in = inside.sum(axis=1)
     return np.where(n_in > 0, bg.sum(axis=1) / np.maximum(n_in, 1), 0.0)
+
+
+def _linspace(start: float, stop: float, n: int) -> np.ndarray:
+    """``np.linspace(start, stop, n)`` to the bit (the same arithmetic), at a fifth of the
+    cost of its general-purpose argument handling (it runs for every hand and camera)."""
+    if n == 1:
+        return np.array([start], np.float64)
+    out = _arange(n) * ((stop - start) / (n - 1))
+    out += start
+    out[-1] = stop
+    return out
+
+
+@functools.cache
+def _arange(n: int) -> np.ndarray:
+    """(n,) read-only float64 ``0, 1, ..., n - 1``."""
+    steps = np.arange(n, dtype=np.float64)
+    readonly(steps)
+    return steps
 
 
 @functools.cache
@@ -130,15 +151,15 @@ def choose_radius(background_fractions: np.ndarray, grow_stop_bg: float, inside_
     >>> choose_radius(np.array([0.1, 0.4, 0.3]), 0.5, 0.2)
     1
     """
-    bg = np.asarray(background_fractions, np.float64)
+    # a handful of radii: plain Python beats numpy's per-call cost here
+    bg = np.asarray(background_fractions, np.float64).reshape(-1).tolist()
     if len(bg) == 0:
         raise ValueError("background_fractions must hold at least one radius, got none")
-    hits = np.flatnonzero(bg >= grow_stop_bg)
-    if len(hits):
-        return int(hits[0])
-    if bg.max() < inside_bg:
-        return 0
-    return int(np.argmax(bg))
+    for i, share in enumerate(bg):
+        if share >= grow_stop_bg:
+            return i
+    best = max(bg)
+    return 0 if best < inside_bg else bg.index(best)
 
 
 def find_hand_blob(blob_labels: np.ndarray, point_px: np.ndarray, search_px: float) -> int:
@@ -171,6 +192,10 @@ def find_hand_blob(blob_labels: np.ndarray, point_px: np.ndarray, search_px: flo
     y0, y1 = max(int(round(v)) - r, 0), min(int(round(v)) + r + 1, h)
     if x0 >= x1 or y0 >= y1:
         return 0
+    ur, vr = int(np.floor(u + 0.5)), int(np.floor(v + 0.5))
+    if 0 <= ur < w and 0 <= vr < h and blob_labels[vr, ur]:
+        # the usual case: no other pixel is nearer (ties aside), so no search is needed
+        return int(blob_labels[vr, ur])
     win = blob_labels[y0:y1, x0:x1]
     rows, cols = np.nonzero(win)
     if len(rows) == 0:
@@ -390,12 +415,13 @@ def _spot(
         if near.any():
             rows, cols = rows[near], cols[near]
             break
-    centre = np.array([cols.mean(), rows.mean()])
+    # integer sums are exact: the same centre as the arrays' means, at a third of the cost
+    centre = np.array([int(cols.sum()), int(rows.sum())], np.float64) / len(cols)
     r_blob = float(np.sqrt(np.max((cols - centre[0]) ** 2 + (rows - centre[1]) ** 2))) + 0.5
     r_small = min(max(r_lo, r_blob), r_hi)
-    radii = np.linspace(r_small, r_hi, cfg.n_radius_steps)
-    foreground = observation.silhouettes.labels[y0:y1, x0:x1] > 0
-    bg = rim_background_fraction(foreground, centre, radii, cfg.n_rim_samples)
+    radii = _linspace(r_small, r_hi, cfg.n_radius_steps)
+    people = observation.silhouettes.labels[y0:y1, x0:x1]
+    bg = rim_background_fraction(people, centre, radii, cfg.n_rim_samples)
     k = choose_radius(bg, cfg.grow_stop_bg, cfg.inside_bg)
     return HandSpot(
         camera=camera.name,
@@ -432,16 +458,14 @@ def hand_view(
     centre = spot.centre_px - origin
     foreground = observation.silhouettes.labels[roi] > 0
     skin = observation.skin[roi]
-    blob = observation.blobs.labels[roi] == spot.blob_label
     # The region lies inside the circle, so it is built on the circle's box (shifting the
     # centre by the box's integer origin is exact: the same circle). Only the extent test
     # looks further, at the person's non-skin pixels in the whole region of interest; the
     # region is a subset of them, so one hue-code image serves both.
     box = circle_box(centre, spot.radius_px, foreground.shape)
     box_origin = np.array([box[1].start, box[0].start], np.float64)
-    region = hand_region(
-        foreground[box], skin[box], blob[box], centre - box_origin, spot.radius_px
-    )
+    blob = observation.blobs.labels[roi][box] == spot.blob_label
+    region = hand_region(foreground[box], skin[box], blob, centre - box_origin, spot.radius_px)
     person_codes = pixel_hue_codes(
         bgr[roi], cfg.min_saturation, cfg.min_value, mask=foreground & ~skin
     )
@@ -834,18 +858,16 @@ def _unambiguous_views(
         if v.blob_label not in owner or v.depth_m < views[owner[v.blob_label]].depth_m:
             owner[v.blob_label] = j
     keep = sorted(owner.values())
-    out = []
-    for j in keep:
-        vj = views[j]
-        clash = any(
-            np.hypot(*(vj.centre_px - views[k].centre_px)) < vj.radius_px + views[k].radius_px
-            for k in keep
-            if k != j
-        )
-        gaps = np.hypot(*(obstacles[:, :2] - vj.centre_px).T)
-        if not clash and not np.any(gaps < vj.radius_px + obstacles[:, 2]):
-            out.append(j)
-    return out
+    if not keep:
+        return []
+    centres = np.array([views[j].centre_px for j in keep])
+    radii = np.array([views[j].radius_px for j in keep])
+    gaps = np.hypot(*(centres[:, None, :] - centres[None, :, :]).transpose(2, 0, 1))
+    clash = gaps < radii[:, None] + radii[None, :]
+    np.fill_diagonal(clash, False)
+    gaps = np.hypot(*(centres[:, None, :] - obstacles[None, :, :2]).transpose(2, 0, 1))
+    blocked = (gaps < radii[:, None] + obstacles[None, :, 2]).any(axis=1)
+    return [j for j, bad in zip(keep, clash.any(axis=1) | blocked, strict=True) if not bad]
 
 
 def _siblings(hands: Sequence[TargetSnapshot]) -> dict[int, int]:

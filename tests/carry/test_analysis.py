@@ -117,6 +117,39 @@ def test_circle_box_holds_the_whole_circle_and_the_region_built_on_it(centre, ra
     np.testing.assert_array_equal(boxed, full[box])
 
 
+def test_rim_fraction_reads_silhouette_labels_like_the_mask():
+    rng = np.random.default_rng(1)
+    labels = rng.integers(0, 3, (40, 50)).astype(np.int32)  # 0 background, 1-2 people
+    radii = np.array([4.0, 9.5, 30.0])  # the largest circle leaves the image
+    for centre in ([25.0, 20.0], [3.0, 37.0]):
+        np.testing.assert_array_equal(
+            rim_background_fraction(labels, np.array(centre), radii, 48),
+            rim_background_fraction(labels > 0, np.array(centre), radii, 48),
+        )
+
+
+def test_find_hand_blob_returns_the_nearest_blob_pixel_within_reach():
+    rng = np.random.default_rng(2)
+    lab = np.where(rng.random((30, 30)) < 0.15, rng.integers(1, 5, (30, 30)), 0)
+    rows, cols = np.nonzero(lab)
+    for point in rng.uniform(-2.0, 31.0, (300, 2)):
+        d2 = (cols - point[0]) ** 2 + (rows - point[1]) ** 2
+        nearest = int(np.argmin(d2))
+        expected = int(lab[rows[nearest], cols[nearest]]) if d2[nearest] <= 9.5 else 0
+        assert find_hand_blob(lab, point, 3.0) == expected, point
+
+
+def test_radius_steps_are_numpys_linspace_to_the_bit():
+    rng = np.random.default_rng(3)
+    for _ in range(2000):
+        start = rng.uniform(1.0, 60.0)
+        stop = start + rng.uniform(0.0, 60.0) * (rng.random() < 0.9)
+        n = int(rng.integers(1, 9))
+        np.testing.assert_array_equal(
+            carry_analysis._linspace(start, stop, n), np.linspace(start, stop, n)
+        )
+
+
 def test_find_hand_blob_prefers_the_blob_under_the_point():
     lab = np.zeros((30, 30), np.int32)
     lab[10:14, 10:14] = 2
