@@ -329,6 +329,16 @@ class ActivityEngine:
                 return est
         return self._latest_carry(target_id, t_ns)
 
+    def _surest_carry(self, target_id: int, since_ns: int, t_ns: int) -> CarryEstimate | None:
+        """The most confident estimate from ``since_ns`` to ``t_ns`` (the latest of equals),
+        else None."""
+        best: CarryEstimate | None = None
+        for fr in self._frames:
+            est = fr.carry.get(target_id) if since_ns <= fr.t_ns <= t_ns else None
+            if est is not None and (best is None or est.confidence >= best.confidence):
+                best = est
+        return best
+
     def _carry_since(self, target_id: int, t_ns: int, since_ns: int) -> CarryEstimate | None:
         """The latest estimate at or before ``t_ns`` if its evidence all dates from
         ``since_ns`` or later (else None): after a pick or place the fusion window still
@@ -698,11 +708,11 @@ class ActivityEngine:
                     before = self._latest_carry(hand.target_id, start)
                 elif ts[0] > since and np.linalg.norm(ps[0] - point) >= th.seen_reach_m:
                     # the track begins late in the reach (the hand was unseen before): what
-                    # it held on the part seen is what it brought
+                    # it held on the part seen is what it brought, and the estimate that is
+                    # surest of it tells (the window restarted when the hand was seen again,
+                    # so the first estimates rest on a few samples and flicker)
                     start = int(ts[0])
-                    before = self._confident_carry(
-                        hand.target_id, climax, start, th.min_confidence
-                    )
+                    before = self._surest_carry(hand.target_id, start, climax)
                 else:
                     continue  # no reach: the hand did not come from separation_m away
                 self._stills[key] = _StillEpisode(
