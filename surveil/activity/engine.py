@@ -210,6 +210,8 @@ class ActivityEngine:
         self._still_disarmed: dict[tuple[str, int], np.ndarray] = {}
         self._last_t_ns: int | None = None
         self._released: list[int] = []
+        # (activity, actors) -> end of the last such event, ns (for min_repeat_s)
+        self._last_end: dict[tuple[str, frozenset[str]], int] = {}
 
     @property
     def released_hands(self) -> tuple[int, ...]:
@@ -264,7 +266,7 @@ class ActivityEngine:
         self._open_stills(cur)
         events += self._advance_stills(cur)
         self._rearm(cur)
-        return self._ordered(events)
+        return self._ordered(self._not_repeats(events))
 
     def finish(self) -> list[ActivityEvent]:
         """Decide the pending episodes at the end of the stream with the latest estimates.
@@ -290,6 +292,7 @@ class ActivityEngine:
                 else:
                     log.debug("%s: %s never left its still point", st.rule.rule_id, st.label)
                 del self._stills[key]
+        events = self._not_repeats(events)
         self.reset()
         return self._ordered(events)
 
@@ -824,6 +827,39 @@ class ActivityEngine:
             rule = self.rules[key[0]]
             if snap is None or np.linalg.norm(snap.mean_m - point) >= rule.thresholds.separation_m:
                 del self._still_disarmed[key]
+
+    def _not_repeats(self, events: list[ActivityEvent]) -> list[ActivityEvent]:
+        """``events`` without those whose rule's ``min_repeat_s`` has not passed since the
+        end of the same activity of the same actors (they continue it), in climax order."""
+        kept = []
+        for ev in sorted(events, key=lambda e: e.climax_ns):
+            key = (ev.activity, frozenset(ev.actors))
+            gap_s = self.rules[ev.activity].thresholds.min_repeat_s
+            last = self._last_end.get(key)
+            if gap_s > 0 and last is not None and ev.climax_ns - last < _ns(gap_s):
+                log.debug(
+                    "%s: %s at %d ns continues the one that ended at %d ns (min_repeat_s)",
+                    ev.rule,
+                    "+".join(ev.actors),
+                    ev.climax_ns,
+                    last,
+                )
+            else:
+                kept.append(ev)
+            self._last_end[key] = max(ev.end_ns, last or ev.end_ns)
+        # an event is decided up to max_coincidence_s + separation_timeout_s after its climax
+        horizon = max(
+            (
+                th.min_repeat_s + th.max_coincidence_s + th.separation_timeout_s
+                for th in (r.thresholds for r in self.rules)
+            ),
+            default=0.0,
+        )
+        if self._last_t_ns is not None:
+            for key, end in list(self._last_end.items()):
+                if self._last_t_ns - end > _ns(horizon):
+                    del self._last_end[key]
+        return kept
 
     def _ordered(self, events: list[ActivityEvent]) -> list[ActivityEvent]:
         order = {r.name: i for i, r in enumerate(self.rules)}

@@ -154,6 +154,14 @@ class Thresholds:
         min=0.0,
         max=1.0,
     )
+    min_repeat_s: float = setting(
+        0.0,
+        "the same activity of the same actors counts again only if its climax comes at least "
+        "this long after the previous one's end (a tracker that parts a long handshake for a "
+        "moment and joins it again would report it twice); 0 = every time, s",
+        min=0.0,
+        max=60.0,
+    )
     conserve_objects: bool = setting(
         True,
         "two hands that meet and part hold as many objects after as before: when one of "

@@ -99,6 +99,38 @@ def test_handshake_two_people_no_objects(rules):
     assert ev.confidence == pytest.approx(0.9)
 
 
+@pytest.mark.parametrize("min_repeat_s", [1.0, 0.0])
+def test_a_handshake_parted_for_a_moment_is_one_handshake(tmp_path, rules, min_repeat_s):
+    """The tracker parts a long handshake at 1.5 s (one estimate drifts 0.35 m off, onto the
+    person's other limbs) and joins it again at 1.9 s (three_people, seeds 4 and 5: two
+    handshakes 0.5-0.8 s apart for one). The default handshake rule's min_repeat_s (1.0 s)
+    reports one; with 0 each join counts."""
+    point = (0.57, 0.0, 1.05)
+    drifted = (0.57 - 0.35, 0.0, 1.05)
+    p1_right = keyframes(
+        (0.5, P1_RIGHT_REST),
+        (1.0, point),
+        (1.5, point),
+        (1.6, drifted),
+        (1.8, drifted),
+        (1.9, point),
+        (2.5, point),
+        (3.0, P1_RIGHT_REST),
+    )
+    script = two_people()
+    script.tracks[2].path = p1_right
+    script.tracks[5].path = meet(P2_RIGHT_REST, (0.63, 0.0, 1.05), t_leave=2.5, t_back=3.0)
+    script.joins = [Join(3, 6, 1.0, 1.5), Join(3, 6, 1.9, 2.5)]
+    script.duration_s = 5.0
+    text = Path(rules.sources[0]).read_text()
+    assert "min_repeat_s = 1.0" in text
+    custom = tmp_path / "default.toml"
+    custom.write_text(text.replace("min_repeat_s = 1.0", f"min_repeat_s = {min_repeat_s}"))
+    events = run(load_rules([custom]), script.stream())
+    climaxes = [e.climax_ns for e in events if e.activity == "handshake"]
+    assert climaxes == ([1 * S] if min_repeat_s else [1 * S, pytest.approx(1.9 * S, abs=S // 15)])
+
+
 def test_clap_one_person_no_objects(rules):
     events = run(rules, one_person().stream())
     assert [e.activity for e in events] == ["clap"]
