@@ -197,6 +197,19 @@ class ActivityEngine:
             (r.thresholds.max_approach_s + r.thresholds.still_s for r in active), default=0.0
         )
         self._history_ns = _ns(look_back + _HISTORY_MARGIN_S)
+        # how long an event's end matters for min_repeat_s: an event is decided up to
+        # max_coincidence_s + separation_timeout_s after its climax
+        self._repeat_horizon_ns = _ns(
+            max(
+                (
+                    r.thresholds.min_repeat_s
+                    + r.thresholds.max_coincidence_s
+                    + r.thresholds.separation_timeout_s
+                    for r in rules
+                ),
+                default=0.0,
+            )
+        )
         self.reset()
 
     def reset(self) -> None:
@@ -846,18 +859,10 @@ class ActivityEngine:
                 )
             else:
                 kept.append(ev)
-            self._last_end[key] = max(ev.end_ns, last or ev.end_ns)
-        # an event is decided up to max_coincidence_s + separation_timeout_s after its climax
-        horizon = max(
-            (
-                th.min_repeat_s + th.max_coincidence_s + th.separation_timeout_s
-                for th in (r.thresholds for r in self.rules)
-            ),
-            default=0.0,
-        )
+            self._last_end[key] = ev.end_ns if last is None else max(ev.end_ns, last)
         if self._last_t_ns is not None:
             for key, end in list(self._last_end.items()):
-                if self._last_t_ns - end > _ns(horizon):
+                if self._last_t_ns - end > self._repeat_horizon_ns:
                     del self._last_end[key]
         return kept
 
