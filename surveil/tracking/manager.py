@@ -541,6 +541,20 @@ class MultiTargetTracker:
                 t.split_first_m = first
                 t.split_gain_m = dist - first
 
+    def _far_apart(self, tr: _Track) -> bool:
+        """Whether a combined pair's two modes have been there for ``separate_far_frames``
+        frame sets, are ``separate_far_m`` or more apart and have not closed in by
+        ``separate_gain_m`` since they appeared (a stray closing in on the pair is not a
+        target that left it)."""
+        lc = self.cfg.lifecycle
+        return (
+            lc.separate_far_m > 0
+            and tr.apart_frames >= lc.separate_far_frames
+            and tr.split_m is not None
+            and tr.split_gain_m > -lc.separate_gain_m
+            and float(np.linalg.norm(tr.split_m[1] - tr.split_m[0])) >= lc.separate_far_m
+        )
+
     def _never_met(
         self, a: _Track, b: _Track, modes: np.ndarray, t_ns: int, starting: bool
     ) -> bool:
@@ -1414,7 +1428,8 @@ class MultiTargetTracker:
                 drifted=tr.id in drifted,
                 partner_id=pairs.get(tr.id),
                 separated=(
-                    tr.apart_frames >= lc.separate_frames and tr.split_gain_m >= lc.separate_gain_m
+                    tr.apart_frames >= lc.separate_frames
+                    and (tr.split_gain_m >= lc.separate_gain_m or self._far_apart(tr))
                 )
                 or tr.unjoin_frames >= lc.separate_frames,
                 labelled=tr.labelled,

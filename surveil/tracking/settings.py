@@ -157,6 +157,20 @@ class LifecycleConfig:
         "not move away from them), m",
         min=0.0,
     )
+    separate_far_m: float = setting(
+        0.3,
+        "a combined pair whose two modes have stayed at least this far apart for "
+        "separate_far_frames frame sets, without closing in by separate_gain_m, separates "
+        "although they did not move apart: a hand that left the pair unseen comes back "
+        "already apart (0 = off), m",
+        min=0.0,
+    )
+    separate_far_frames: int = setting(
+        4,
+        "consecutive frame sets the modes must stay separate_far_m apart (a stray candidate "
+        "beside joined hands flickers; a hand back at rest stays)",
+        min=1,
+    )
     unjoin_gate_m: float = setting(
         0.15,
         "a pair that combined while its trackers were combine_distance_m or more apart (one "

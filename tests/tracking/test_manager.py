@@ -1199,3 +1199,50 @@ def test_a_lost_hand_is_not_reacquired_on_another_persons_body(rig, rng, own_bod
         np.linalg.norm(last[b_hand.target_id].mean_m - at_a) < 0.1
     )
     assert came_back is not own_body
+
+
+def test_a_hand_that_left_a_pair_unseen_parts_it_where_it_came_back(rig, rng):
+    """After a clap the right hand leaves unseen (two frame sets without its candidate) and
+    comes back at rest 35 cm from the left hand, which stays where they met. The modes
+    appeared already apart and never move farther apart, so separate_gain_m alone keeps the
+    pair combined (both labels on the left hand); with separate_far_m the pair parts and
+    each label goes to its own hand."""
+    frames, _, p = clap_frames(cross=False)
+    rest_end = 35 + 8 + 5
+    head, meet = frames[rest_end - 1][0], frames[rest_end - 1][1]
+    back = meet - 0.35 * p["left"]
+    frames = frames[:rest_end] + [[head, meet]] * 2 + [[head, meet, back]] * 15
+
+    def final(far_m: float) -> dict[str, np.ndarray]:
+        cfg = TrackingConfig(
+            lifecycle=LifecycleConfig(retire_unclaimed_s=0.0, separate_far_m=far_m)
+        )
+        out = run(MultiTargetTracker(cfg, rig, seed=7), frames, rng)
+        return {s.label: (s.mean_m, s.phase) for s in out[-1].targets}
+
+    assert LifecycleConfig().separate_far_m == 0.3  # on by default
+    parted = final(0.3)
+    assert np.linalg.norm(parted["p1/left_hand"][0] - meet) < 0.04
+    assert np.linalg.norm(parted["p1/right_hand"][0] - back) < 0.04
+    assert parted["p1/right_hand"][1] is Phase.NORMAL
+    stuck = final(0.0)
+    assert stuck["p1/right_hand"][1] is Phase.COMBINED
+
+
+def test_a_steady_stray_for_fewer_than_separate_far_frames_does_not_part_a_pair(rig, rng):
+    """A candidate 36 cm from joined hands, in the same place for three frame sets (a
+    skin-coloured patch of a shirt seen for a moment), is not a hand that left the pair:
+    separate_far_frames (4) asks for more. Seen for the whole rest, it parts them."""
+    frames, _, p = clap_frames(cross=False)
+    joined = list(range(35 + 8, 35 + 8 + 5))
+    stray = frames[joined[0]][1] + 0.36 * p["fwd"]
+
+    def splits(n_stray: int) -> list[int]:
+        fr = [
+            [*f, stray] if i in joined[1 : 1 + n_stray] else f for i, f in enumerate(frames)
+        ]
+        out = run(MultiTargetTracker(LONE, rig, seed=7), fr, rng)
+        return [i for i, f in enumerate(out) for t in f.transitions if t.old is Phase.COMBINED]
+
+    assert min(splits(3)) > max(joined)  # parted only when the hands themselves part
+    assert min(splits(4)) <= max(joined)
