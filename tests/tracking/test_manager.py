@@ -1238,9 +1238,7 @@ def test_a_steady_stray_for_fewer_than_separate_far_frames_does_not_part_a_pair(
     stray = frames[joined[0]][1] + 0.36 * p["fwd"]
 
     def splits(n_stray: int) -> list[int]:
-        fr = [
-            [*f, stray] if i in joined[1 : 1 + n_stray] else f for i, f in enumerate(frames)
-        ]
+        fr = [[*f, stray] if i in joined[1 : 1 + n_stray] else f for i, f in enumerate(frames)]
         out = run(MultiTargetTracker(LONE, rig, seed=7), fr, rng)
         return [i for i, f in enumerate(out) for t in f.transitions if t.old is Phase.COMBINED]
 
