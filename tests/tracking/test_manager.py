@@ -1213,7 +1213,7 @@ def test_a_hand_that_left_a_pair_unseen_parts_it_where_it_came_back(rig, rng):
     back = meet - 0.35 * p["left"]
     frames = frames[:rest_end] + [[head, meet]] * 2 + [[head, meet, back]] * 15
 
-    def final(far_m: float) -> dict[str, np.ndarray]:
+    def final(far_m: float) -> dict[str, tuple[np.ndarray, Phase]]:
         cfg = TrackingConfig(
             lifecycle=LifecycleConfig(retire_unclaimed_s=0.0, separate_far_m=far_m)
         )
@@ -1232,7 +1232,7 @@ def test_a_hand_that_left_a_pair_unseen_parts_it_where_it_came_back(rig, rng):
 def test_a_steady_stray_for_fewer_than_separate_far_frames_does_not_part_a_pair(rig, rng):
     """A candidate 36 cm from joined hands, in the same place for three frame sets (a
     skin-coloured patch of a shirt seen for a moment), is not a hand that left the pair:
-    separate_far_frames (4) asks for more. Seen for the whole rest, it parts them."""
+    separate_far_frames (4) asks for more. Seen for four, it parts them."""
     frames, _, p = clap_frames(cross=False)
     joined = list(range(35 + 8, 35 + 8 + 5))
     stray = frames[joined[0]][1] + 0.36 * p["fwd"]
