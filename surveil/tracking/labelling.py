@@ -41,7 +41,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from surveil.camera import Rig
+from surveil.camera import Camera, Rig
 from surveil.datatypes import CameraObservation, Limb
 from surveil.tracking.settings import LabellingConfig
 from surveil.validate import require_shape
@@ -323,6 +323,65 @@ def facing_cues(
         if 1e-6 < dist[k] <= cfg.social_range_m:
             ev += cfg.social_weight * d[k] / dist[k]
     return ev
+
+
+def head_skin_share(
+    head_m: np.ndarray, observation: CameraObservation, camera: Camera, radius_m: float
+) -> float:
+    """Share of skin pixels (``observation.skin``) in the square of half-side ``radius_m``,
+    at the head's depth, around the head's projection into ``camera``: about half for a
+    face seen from the front, a little neck from behind (hair), in between from the side.
+    NaN where it says nothing: the head behind the camera, its square not wholly in the
+    image, or its projection off every silhouette.
+    """
+    px, depth = camera.project(np.asarray(head_m, dtype=np.float64)[None])
+    if depth[0] <= 0:
+        return float("nan")
+    u, v = px[0]
+    r = radius_m * float(camera.K[0, 0]) / depth[0]
+    h, w = observation.skin.shape
+    u0, u1 = round(u - r), round(u + r) + 1
+    v0, v1 = round(v - r), round(v + r) + 1
+    if u0 < 0 or v0 < 0 or u1 > w or v1 > h:
+        return float("nan")
+    if observation.silhouettes.labels[round(v), round(u)] == 0:
+        return float("nan")
+    return float(observation.skin[v0:v1, u0:u1].mean())
+
+
+def face_cue(
+    head_m: np.ndarray, cameras_m: np.ndarray, skin_shares: np.ndarray, weight: float
+) -> np.ndarray:
+    """One frame's facing evidence (2,) from where the face is seen.
+
+    Each camera's skin share around the head (:func:`head_skin_share`; NaN = none) is
+    modelled as ``a + b . d`` with ``d`` the horizontal unit vector from the head to the
+    camera: most skin where the face looks, least from behind (hair). ``b`` is fitted by
+    least squares over the cameras (three or more; with two, the least ``b`` along the line
+    between them that explains their difference) and returned times ``weight``, its length
+    capped at ``weight``. The fit, not a plain sum of ``share * d``, because a person near a
+    wall has most cameras on one side. A head that looks the same from everywhere (a bald
+    head, skin missed in every view) gives ~0; so does a single camera.
+
+    >>> head = np.array([0.0, 0.0, 1.7])
+    >>> cams = np.array([[3.0, 0, 2.5], [-3.0, 0, 2.5], [0, 3.0, 2.5]])
+    >>> face_cue(head, cams, np.array([0.5, 0.1, 0.3]), 1.0).round(3).tolist()
+    [0.2, 0.0]
+    """
+    ok = np.isfinite(skin_shares)
+    if ok.sum() < 2 or weight <= 0:
+        return np.zeros(2)
+    to_cam = np.asarray(cameras_m, dtype=np.float64)[ok, :2] - np.asarray(head_m)[:2]
+    to_cam /= np.maximum(np.linalg.norm(to_cam, axis=1, keepdims=True), 1e-9)
+    s = skin_shares[ok]
+    if len(s) == 2:
+        across = to_cam[0] - to_cam[1]
+        b = (s[0] - s[1]) * across / max(float(across @ across), 1e-9)
+    else:
+        design = np.column_stack([np.ones(len(s)), to_cam])
+        b = np.linalg.lstsq(design, s, rcond=None)[0][1:]
+    length = float(np.linalg.norm(b))
+    return weight * (b if length <= 1.0 else b / length)
 
 
 def owner_rule(

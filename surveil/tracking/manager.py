@@ -1077,7 +1077,7 @@ class MultiTargetTracker:
         self._detach_astray(t_ns)
         self._attach_hands(t_ns, returning)
         self._contest_slots(t_ns)
-        self._update_facing()
+        self._update_facing(observations)
         self._decide_sides(t_ns)
         self._revise_sides(t_ns)
 
@@ -1317,9 +1317,13 @@ class MultiTargetTracker:
             self._remove(gone)
         return k if len(p.hand_ids) < 2 else -1
 
-    def _update_facing(self) -> None:
+    def _update_facing(self, observations: Mapping[str, CameraObservation]) -> None:
         lcfg = self.cfg.labelling
         persons, heads = self._live_heads()
+        face_views = [
+            (self.rig[name], obs) for name, obs in observations.items() if lcfg.face_weight > 0
+        ]
+        face_cams = np.array([cam.centre_m for cam, _ in face_views]).reshape(-1, 3)
         for i, p in enumerate(persons):
             head = self._tracks[p.head_id]
             if head.phase not in ACTIVE:
@@ -1333,6 +1337,14 @@ class MultiTargetTracker:
             ).reshape(-1, 3)
             others = np.delete(heads, i, axis=0)
             ev = lab.facing_cues(head.mean_m, head.vel_mps, hands, others, lcfg)
+            if face_views and head.phase is not Phase.LOST:
+                shares = np.array(
+                    [
+                        lab.head_skin_share(head.mean_m, obs, cam, lcfg.face_radius_m)
+                        for cam, obs in face_views
+                    ]
+                )
+                ev = ev + lab.face_cue(head.mean_m, face_cams, shares, lcfg.face_weight)
             p.facing_ev = lcfg.facing_decay * p.facing_ev + ev
 
     def _facing(self, p: _Person, head_m: np.ndarray) -> np.ndarray:

@@ -447,6 +447,18 @@ class LabellingConfig:
     social_range_m: float = setting(
         2.5, "another person within this range draws the facing evidence, m", min=0.0
     )
+    face_weight: float = setting(
+        1.0,
+        "facing evidence per frame from where the face is seen: towards the cameras that see "
+        "more skin around the head than the others, this times the difference in skin share "
+        "(0 = off)",
+        min=0.0,
+    )
+    face_radius_m: float = setting(
+        0.1,
+        "the skin share is taken over the square of this half-side around the head, m",
+        min=0.01,
+    )
 
 
 @dataclass(frozen=True, slots=True)

@@ -178,3 +178,42 @@ def test_across_body_needs_both_hands_clearly_on_their_sides(challenger_y, side_
     # turning the person round swaps its sides
     flipped = lab.across_body(hands, np.array([0.1, challenger_y, 1.0]), head, -facing, side_m)
     assert flipped.tolist() == expected
+
+
+def test_head_skin_share_counts_skin_around_the_head_and_abstains_where_it_cannot(rig):
+    obs = _observations_of_a_person(rig, (2.5, 2.0))
+    cam = rig["cam0"]
+    head = np.array([2.5, 2.0, 1.7])
+    (u, v), depth = (x[0] for x in cam.project(head[None]))
+    r = 0.1 * cam.K[0, 0] / depth
+    skin = np.zeros_like(obs["cam0"].skin)
+    skin[round(v) : round(v + r) + 1, round(u - r) : round(u + r) + 1] = True  # lower half
+    seen = CameraObservation("cam0", obs["cam0"].silhouettes, skin, obs["cam0"].blobs)
+    assert lab.head_skin_share(head, seen, cam, 0.1) == pytest.approx(0.5, abs=0.1)
+    assert lab.head_skin_share(head, obs["cam0"], cam, 0.1) == 0.0  # hair only
+    # nobody there (off every silhouette), behind the camera, or cut by the image border
+    assert np.isnan(lab.head_skin_share(np.array([4.5, 3.5, 1.7]), seen, cam, 0.1))
+    assert np.isnan(lab.head_skin_share(cam.centre_m - [1.0, 1.0, 0.0], seen, cam, 0.1))
+    assert np.isnan(lab.head_skin_share(head, seen, cam, 3.0))
+
+
+@pytest.mark.parametrize("facing_deg", [0.0, 60.0, 135.0, -100.0])
+def test_face_cue_points_where_the_face_is_seen(rig, facing_deg):
+    cams = np.array([c.centre_m for c in rig.cameras])
+    f = np.radians(facing_deg)
+    fwd = np.array([np.cos(f), np.sin(f)])
+    for head in (np.array([2.5, 2.0, 1.7]), np.array([4.5, 1.0, 1.7])):  # middle, by a wall
+        to_cam = cams[:, :2] - head[:2]
+        to_cam /= np.linalg.norm(to_cam, axis=1, keepdims=True)
+        shares = 0.35 + 0.25 * to_cam @ fwd  # face ~0.6 from the front, hair ~0.1 behind
+        ev = lab.face_cue(head, cams, shares, 1.0)
+        assert np.degrees(abs(np.angle(complex(*ev) / complex(*fwd)))) < 1.0
+        assert np.linalg.norm(ev) == pytest.approx(0.25, abs=0.01)
+        assert np.linalg.norm(lab.face_cue(head, cams, shares, 2.0)) == pytest.approx(0.5, 0.05)
+        # a head alike from everywhere, or seen by one camera only, says nothing
+        assert np.allclose(lab.face_cue(head, cams, np.full(4, 0.6), 1.0), 0.0)
+        one = np.array([shares[0], np.nan, np.nan, np.nan])
+        assert np.allclose(lab.face_cue(head, cams, one, 1.0), 0.0)
+    # two cameras facing each other across the person: along the line between them
+    two = lab.face_cue(np.zeros(3), np.array([[3.0, 0, 2], [-3.0, 0, 2]]), np.array([0.6, 0.1]), 1)
+    assert two.tolist() == pytest.approx([0.25, 0.0])

@@ -186,6 +186,54 @@ def test_sides_guessed_wrong_are_swapped_once_the_person_reaches_forward(rig, rn
     assert np.linalg.norm(kept["p1/right_hand"] - ahead[0]) < 0.03
 
 
+def face_views(rig, head_m, fwd, radius_m=0.1) -> dict[str, CameraObservation]:
+    """Every camera's frame all silhouette, with skin over the head's square in the cameras
+    the face looks towards (within 90 degrees of ``fwd``) and none in the others (hair)."""
+    out = {}
+    for cam in rig.cameras:
+        h, w = cam.height, cam.width
+        skin = np.zeros((h, w), bool)
+        to_cam = cam.centre_m[:2] - head_m[:2]
+        if to_cam @ fwd[:2] > 0:
+            (u, v), depth = (x[0] for x in cam.project(head_m[None]))
+            r = radius_m * cam.K[0, 0] / depth
+            skin[round(v - r) : round(v + r) + 1, round(u - r) : round(u + r) + 1] = True
+        sil = Silhouettes(
+            np.ones((h, w), np.int32),
+            np.zeros(1),
+            np.full(1, h - 1.0),
+            np.zeros((h, w), np.float32),
+        )
+        blobs = BlobSet(
+            np.zeros((0, 2)),
+            np.zeros(0, np.int64),
+            np.zeros((0, 4), np.int32),
+            np.zeros(0, np.int32),
+            np.zeros(0),
+            np.zeros((h, w), np.int32),
+        )
+        out[cam.name] = CameraObservation(cam.name, sil, skin, blobs)
+    return out
+
+
+def test_a_still_person_seen_face_on_is_sided_by_the_face(rig, rng):
+    # a lone person standing still facing away from the middle of the rig, hands at rest:
+    # no motion or hand cue says where they face; the cameras in front see the face
+    a = body((3.5, 2.0), 0.0)
+    frames = [[a["head"], a["left_hand"], a["right_hand"]]] * 40
+    obs = face_views(rig, a["head"], a["fwd"])
+    cfg = TrackingConfig(lifecycle=LONE.lifecycle, labelling=LabellingConfig(face_weight=1.0))
+    trk = MultiTargetTracker(cfg, rig, seed=2)
+    out = [trk.step(i * DT_NS, candidates(pts, rng), obs) for i, pts in enumerate(frames)]
+    sided = by_label(out[-1])
+    assert sided["p1/left_hand"][1] > a["head"][1] > sided["p1/right_hand"][1]
+    facing = trk.person_facing(1)
+    assert np.degrees(abs(np.arctan2(facing[1], facing[0]))) < 10
+    # without the face cue the sides are guessed (facing the middle of the rig): wrong
+    guessed = run(MultiTargetTracker(LONE, rig, seed=2), frames, rng)
+    assert by_label(guessed[-1])["p1/left_hand"][1] < a["head"][1]
+
+
 def clap_frames(cross: bool):
     """One person facing the middle of the rig; from frame 35 (after left / right were
     decided) the hands move to a point 35 cm in front of the chest,
