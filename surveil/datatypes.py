@@ -423,6 +423,18 @@ class BlobSet:
     def __len__(self) -> int:
         return len(self.centroids_px)
 
+    @classmethod
+    def empty(cls, shape: tuple[int, int]) -> BlobSet:
+        """No blobs in a frame of ``shape`` (H, W)."""
+        return cls(
+            np.zeros((0, 2)),
+            np.zeros(0, np.int64),
+            np.zeros((0, 4), np.int32),
+            np.zeros(0, np.int32),
+            np.zeros(0),
+            np.zeros(shape, np.int32),
+        )
+
 
 @dataclass(frozen=True, slots=True)
 class CameraObservation:

@@ -29,17 +29,6 @@ SHOULDER_DROP_REL = 0.18
 MIN_OUTLINE_PX = 5  # fewer outline pixels than this: no verdict, the blob is kept
 
 
-def _empty_blobs(shape: tuple[int, int]) -> BlobSet:
-    return BlobSet(
-        np.zeros((0, 2)),
-        np.zeros(0, np.int64),
-        np.zeros((0, 4), np.int32),
-        np.zeros(0, np.int32),
-        np.zeros(0),
-        np.zeros(shape, np.int32),
-    )
-
-
 def _open(mask: np.ndarray, diameter_px: int) -> np.ndarray:
     """Morphological opening of a bool mask with an elliptical kernel, outside the frame
     counting as empty (computed on the mask's bounding box: the opening of empty space is
@@ -350,7 +339,7 @@ def extract_blobs(
         require_shape("bgr", bgr, (*skin.shape, 3), np.uint8)
     region = silhouettes.region(blob_margin_px(cfg, skin.shape[1]))
     if region is None:
-        return _empty_blobs(skin.shape)
+        return BlobSet.empty(skin.shape)
     # everything happens near people: on the box around them (the margin keeps every step's
     # reach inside it, so the blobs are those of the whole frame), then back to the frame
     rows, cols = region
@@ -480,7 +469,7 @@ def _extract(
     n_keep = math.ceil(cfg.blob_excess * 3 * n_h)
     order = ok[np.argsort(-areas[ok], kind="stable")][:n_keep]  # 0-based blob index
     if len(order) == 0:
-        return _empty_blobs(shape)
+        return BlobSet.empty(shape)
     comp = order + 1  # OpenCV component ids
     # majority silhouette label under each kept blob
     n_sil = int(sil.max()) + 1

@@ -102,14 +102,7 @@ def _observations_of_a_person(rig, centre_xy, *, scale: int = 1):
         cv2.fillConvexPoly(mask, hull, 1)
         dist = cv2.distanceTransform((1 - mask).astype(np.uint8), cv2.DIST_L2, 3)
         sil = Silhouettes(mask.astype(np.int32), np.zeros(1), np.ones(1), dist.astype(np.float32))
-        blobs = BlobSet(
-            np.zeros((0, 2)),
-            np.zeros(0, np.int64),
-            np.zeros((0, 4), np.int32),
-            np.zeros(0, np.int32),
-            np.zeros(0),
-            np.zeros((h, w), np.int32),
-        )
+        blobs = BlobSet.empty((h, w))
         out[cam.name] = CameraObservation(cam.name, sil, np.zeros((h, w), bool), blobs)
     return out
 

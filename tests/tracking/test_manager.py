@@ -204,14 +204,7 @@ def face_views(rig, head_m, fwd, radius_m=0.1) -> dict[str, CameraObservation]:
             np.full(1, h - 1.0),
             np.zeros((h, w), np.float32),
         )
-        blobs = BlobSet(
-            np.zeros((0, 2)),
-            np.zeros(0, np.int64),
-            np.zeros((0, 4), np.int32),
-            np.zeros(0, np.int32),
-            np.zeros(0),
-            np.zeros((h, w), np.int32),
-        )
+        blobs = BlobSet.empty((h, w))
         out[cam.name] = CameraObservation(cam.name, sil, skin, blobs)
     return out
 
