@@ -30,16 +30,6 @@ from surveil.pipeline import Pipeline, load_pipeline_config
 from surveil.synth.scene import synthesise
 
 ROOT = Path(__file__).resolve().parents[1]
-DEFAULT_NAMES = (
-    "clap",
-    "demo",
-    "exchange",
-    "handshake",
-    "negative",
-    "pick_place",
-    "self_exchange",
-    "three_people",
-)
 
 
 def facing_errors_deg(
@@ -82,7 +72,7 @@ def facing_errors_deg(
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("names", nargs="*", default=list(DEFAULT_NAMES))
+    ap.add_argument("names", nargs="*")
     ap.add_argument("--out", type=Path, default=ROOT / "out" / "bench_synth")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--config", type=Path, default=None, help="pipeline settings (TOML)")
@@ -92,7 +82,8 @@ def main(argv: list[str] | None = None) -> int:
         "within 90 deg |"
     )
     print("|---|---|---|---|---|---|---|")
-    for name in args.names:
+    names = args.names or sorted(p.stem for p in (ROOT / "recordings").glob("*.toml"))
+    for name in names:
         matched, err = facing_errors_deg(name, args.out, args.seed, args.config)
         if not len(err):
             print(f"| {name} | {matched} | 0.00 | - | - | - | - |")
