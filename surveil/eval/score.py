@@ -211,17 +211,6 @@ def gated_assignment(cost: np.ndarray, gate: float) -> tuple[np.ndarray, np.ndar
     return rows[keep].astype(np.int64), cols[keep].astype(np.int64)
 
 
-def count_switches(ids: Sequence[int] | np.ndarray) -> int:
-    """Identity switches of one true object: changes between consecutive matched tracker ids
-    (frames without a match are skipped, as in CLEAR MOT).
-
-    >>> count_switches([3, 3, 5, 5, 3]), count_switches([])
-    (2, 0)
-    """
-    arr = np.asarray(ids)
-    return int(np.count_nonzero(arr[1:] != arr[:-1])) if arr.size > 1 else 0
-
-
 def person_mapping(pred_person: np.ndarray, true_person: np.ndarray) -> dict[int, int]:
     """Map predicted person numbers to true ones by the Hungarian method on co-occurrence
     counts (each predicted person to at most one true person and vice versa).
@@ -387,6 +376,84 @@ def _match_targets(
     return matches, np.array(scored, dtype=np.int64), n_countable, n_found, n_false, n_unaligned
 
 
+NEW_TRACKER_S = 0.5  # a tracker younger than this at a switch was started for the limb
+
+
+@dataclass(frozen=True, slots=True)
+class IdentitySwitch:
+    """One identity switch: a true limb matched to ``to_tracker`` after ``from_tracker``.
+
+    t_s : float -- time of the first frame matched to the new tracker, s (ground truth's clock)
+    limb : str -- the true limb's label
+    from_tracker, to_tracker : int -- tracker ids
+    unmatched_s : float -- how long the limb went unmatched in between (0: consecutive frames)
+    from_phase : str -- the old tracker's phase then ("normal", "lost", ...), or "gone" when
+        it is no longer in the output
+    to_age_s : float -- how long the new tracker had existed then, s
+    """
+
+    t_s: float
+    limb: str
+    from_tracker: int
+    to_tracker: int
+    unmatched_s: float
+    from_phase: str
+    to_age_s: float
+
+    @property
+    def kind(self) -> str:
+        """What the switch says about the tracker: ``"not re-acquired"`` (the old tracker was
+        lost or gone and a new one was started: the lost tracker did not find its limb
+        again), ``"taken over"`` (the old tracker was lost or gone and an older tracker, one
+        that was following something else, took the limb) or ``"drifted"`` (the old tracker
+        still runs but no longer follows the limb: it slid onto another target, or two
+        trackers swapped)."""
+        if self.from_phase in ("lost", "gone"):
+            return "not re-acquired" if self.to_age_s < NEW_TRACKER_S else "taken over"
+        return "drifted"
+
+
+def identity_switches(gt: GroundTruth, run: RunData, cfg: EvalConfig) -> list[IdentitySwitch]:
+    """Every identity switch of a run (those that ``TargetMetrics.id_switches`` counts), in
+    the order of the true limbs, then of time."""
+    return _switches(gt, run, _match_targets(gt, run, cfg)[0])
+
+
+def _switches(gt: GroundTruth, run: RunData, m: _Matches) -> list[IdentitySwitch]:
+    """:func:`identity_switches` of a run's matches: the changes of the tracker matched to each
+    true limb between consecutive matched frames (frames without a match are skipped, as in
+    CLEAR MOT)."""
+    phase_of = {p.code: p.value for p in Phase}
+    first_frame: dict[int, int] = {}
+    for k in np.unique(run.target_tracker):
+        first_frame[int(k)] = int(run.target_frame[np.argmax(run.target_tracker == k)])
+    out = []
+    for j, label in enumerate(gt.labels):
+        sel = np.flatnonzero(m.true_idx == j)  # matches are in frame order
+        ids = run.target_tracker[m.pred_row[sel]]
+        for k in np.flatnonzero(ids[1:] != ids[:-1]):
+            a, b = int(ids[k]), int(ids[k + 1])
+            frame = int(run.target_frame[m.pred_row[sel[k + 1]]])
+            span = run.frame_rows(frame)
+            rows = np.arange(span.start, span.stop)
+            old = rows[run.target_tracker[rows] == a]
+            t0_ns, t1_ns = gt.t_ns[m.gt_frame[sel[k]]], gt.t_ns[m.gt_frame[sel[k + 1]]]
+            out.append(
+                IdentitySwitch(
+                    t_s=float(t1_ns) * 1e-9,
+                    limb=label,
+                    from_tracker=a,
+                    to_tracker=b,
+                    unmatched_s=max(round(float(t1_ns - t0_ns) * 1e-9 * gt.fps) - 1, 0) / gt.fps,
+                    from_phase=(
+                        phase_of.get(int(run.target_state[old[0]]), "?") if old.size else "gone"
+                    ),
+                    to_age_s=float(run.frame_t_ns[frame] - run.frame_t_ns[first_frame[b]]) * 1e-9,
+                )
+            )
+    return out
+
+
 def score_targets(
     gt: GroundTruth, run: RunData, cfg: EvalConfig
 ) -> tuple[TargetMetrics, dict[int, int]]:
@@ -416,12 +483,10 @@ def score_targets(
     n_scored = len(scored)
     duration_s = n_scored / gt.fps
     switches_by_person: dict[str, int] = {f"p{p}": 0 for p in sorted(set(true_person))}
-    total_switches = 0
-    for j in range(len(gt.labels)):
-        sel = m.true_idx == j  # matches are in frame order
-        n = count_switches(run.target_tracker[m.pred_row[sel]])
-        total_switches += n
-        switches_by_person[f"p{true_person[j]}"] += n
+    switches = _switches(gt, run, m)
+    total_switches = len(switches)
+    for sw in switches:
+        switches_by_person[sw.limb.split("/")[0]] += 1
     minutes = duration_s / 60.0
     metrics = TargetMetrics(
         n_frames_truth=len(gt.frames),

@@ -21,9 +21,11 @@ from surveil.eval.score import (
     evaluate,
     format_report,
     gated_assignment,
+    identity_switches,
 )
 from surveil.eval.truth_mcap import truth_frames, write_truth_mcap
 from surveil.io.ground_truth import GroundTruth, load_ground_truth, write_ground_truth
+from surveil.io.mcap_reader import read_run
 from surveil.io.mcap_writer import McapWriter
 
 FPS = 15.0
@@ -258,6 +260,51 @@ def test_tracker_id_swap_mid_run_counts_switches(
     minutes = N_FRAMES / FPS / 60
     assert t.id_switches_per_min == pytest.approx(2 / minutes)
     assert t.id_switches_per_person_per_min == pytest.approx({"p1": 2 / minutes, "p2": 0.0})
+
+
+def test_identity_switches_tell_what_became_of_the_old_tracker(
+    rec: Path, rig: Rig, gt: GroundTruth, tmp_path: Path
+) -> None:
+    """p1's left hand (tracker 2) is lost for frames 20-29, then a new tracker (99) follows
+    it; p1's right hand (tracker 3) is followed from frame 30 by tracker 77, which was on
+    something far away before; p2's hands (trackers 5 and 6) swap trackers at frame 40."""
+
+    def change(i: int, tgs: list[TargetSnapshot]) -> list[TargetSnapshot]:
+        out = []
+        for tg in tgs:
+            if tg.target_id == 2 and 20 <= i < 30:
+                tg = replace(tg, phase=Phase.LOST)
+            elif tg.target_id == 2 and i >= 30:
+                tg = replace(tg, target_id=99)
+            elif tg.target_id == 3 and i >= 30:
+                tg = replace(tg, target_id=77)
+            elif tg.target_id in (5, 6) and i >= 40:
+                tg = replace(tg, target_id=11 - tg.target_id)
+            out.append(tg)
+        if i < 30:  # tracker 77 starts on something 3 m away from everyone
+            far = replace(tgs[0], target_id=77, person=0, limb=Limb.UNKNOWN)
+            out.append(replace(far, mean_m=far.mean_m + np.array([0.0, 0.0, 3.0])))
+        return out
+
+    run = read_run(write_prediction(tmp_path / "sw.mcap", gt, rig, change))
+    got = {(sw.limb, sw.from_tracker, sw.to_tracker): sw for sw in identity_switches(gt, run, CFG)}
+    assert set(got) == {
+        ("p1/left_hand", 2, 99),
+        ("p1/right_hand", 3, 77),
+        ("p2/left_hand", 5, 6),
+        ("p2/right_hand", 6, 5),
+    }
+    lost = got["p1/left_hand", 2, 99]
+    assert lost.kind == "not re-acquired" and lost.from_phase == "gone"
+    assert lost.to_age_s == 0.0 and lost.unmatched_s == pytest.approx(10 / FPS)
+    assert lost.t_s == pytest.approx(gt.t_ns[30] * 1e-9)
+    taken = got["p1/right_hand", 3, 77]
+    assert taken.kind == "taken over" and taken.to_age_s == pytest.approx(30 / FPS)
+    assert taken.unmatched_s == 0.0
+    for key in (("p2/left_hand", 5, 6), ("p2/right_hand", 6, 5)):
+        assert got[key].kind == "drifted" and got[key].from_phase == "normal"
+    report = evaluate(rec, tmp_path / "sw.mcap", CFG)
+    assert report.targets.id_switches == len(got)
 
 
 def test_dropping_a_third_of_targets_lowers_recall(

@@ -1,0 +1,83 @@
+"""Every identity switch of a run, and what became of the tracker the limb had before.
+
+    python benchmarks/id_switches.py [--out out/bench_synth] [--seed 0] [--rerun]
+        [--config TOML] [--list] [NAME ...]
+
+Reads ``out/bench_synth/<name>[.<config stem>].mcap`` (written by
+``benchmarks/pipeline_bench.py``; run here when missing or with ``--rerun``) and the ground
+truth, and sorts the switches that ``surveil eval`` counts
+(:func:`surveil.eval.score.identity_switches`) by kind:
+
+- ``not re-acquired``: the old tracker was lost (or retired) and a new tracker was started on
+  the limb: the lost tracker did not find it again;
+- ``taken over``: the old tracker was lost (or retired) and an older tracker, which had been
+  following something else, took the limb;
+- ``drifted``: the old tracker still runs but follows something else now (it slid onto
+  another target, or two trackers swapped).
+
+``--list`` prints every switch: time, true limb, old -> new tracker, how long the limb went
+unmatched in between, the old tracker's phase then and the new tracker's age.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections import Counter
+from pathlib import Path
+
+from surveil.eval.score import EvalConfig, identity_switches
+from surveil.io.ground_truth import load_ground_truth
+from surveil.io.mcap_reader import read_run
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from pipeline_bench import bench, output_path  # noqa: E402
+
+KINDS = ("not re-acquired", "taken over", "drifted")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("names", nargs="*")
+    parser.add_argument("--out", type=Path, default=ROOT / "out" / "bench_synth")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--rerun", action="store_true", help="run the pipeline again")
+    parser.add_argument("--config", type=Path, help="pipeline settings (TOML) of the run")
+    parser.add_argument("--list", action="store_true", help="print every switch")
+    args = parser.parse_args(argv)
+    names = args.names or sorted(p.stem for p in (ROOT / "recordings").glob("*.toml"))
+    rows, listing = [], []
+    totals: Counter = Counter()
+    for name in names:
+        mcap = output_path(args.out, name, args.config)
+        if args.rerun or not mcap.exists():
+            bench(name, args.out, args.seed, args.config)
+        gt = load_ground_truth(args.out / name)
+        switches = identity_switches(gt, read_run(mcap), EvalConfig())
+        kinds = Counter(sw.kind for sw in switches)
+        totals.update(kinds)
+        counts = " | ".join(str(kinds[k]) for k in KINDS)
+        rows.append(f"| {name} | {len(switches)} | {counts} |")
+        listing += [
+            f"| {name} | {sw.t_s:.2f} | {sw.limb} | t{sw.from_tracker} -> t{sw.to_tracker} "
+            f"| {sw.unmatched_s:.2f} | {sw.from_phase} | {sw.to_age_s:.2f} | {sw.kind} |"
+            for sw in sorted(switches, key=lambda sw: sw.t_s)
+        ]
+    print("| scenario | switches | " + " | ".join(KINDS) + " |")
+    print("|---|---|" + "---|" * len(KINDS))
+    print("\n".join(rows))
+    total = sum(totals.values())
+    print(f"| all | {total} | " + " | ".join(str(totals[k]) for k in KINDS) + " |")
+    if args.list:
+        print(
+            "\n| scenario | t s | true limb | trackers | unmatched s | old phase | new age s "
+            "| kind |"
+        )
+        print("|---|---|---|---|---|---|---|---|")
+        print("\n".join(listing))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
