@@ -424,9 +424,8 @@ def _switches(gt: GroundTruth, run: RunData, m: _Matches) -> list[IdentitySwitch
     true limb between consecutive matched frames (frames without a match are skipped, as in
     CLEAR MOT)."""
     phase_of = {p.code: p.value for p in Phase}
-    first_frame: dict[int, int] = {}
-    for k in np.unique(run.target_tracker):
-        first_frame[int(k)] = int(run.target_frame[np.argmax(run.target_tracker == k)])
+    trackers, first_row = np.unique(run.target_tracker, return_index=True)  # rows by frame
+    first_frame = dict(zip(trackers.tolist(), run.target_frame[first_row].tolist(), strict=True))
     out = []
     for j, label in enumerate(gt.labels):
         sel = np.flatnonzero(m.true_idx == j)  # matches are in frame order
@@ -486,7 +485,7 @@ def score_targets(
     switches = _switches(gt, run, m)
     total_switches = len(switches)
     for sw in switches:
-        switches_by_person[sw.limb.split("/")[0]] += 1
+        switches_by_person[f"p{parse_label(sw.limb)[0]}"] += 1
     minutes = duration_s / 60.0
     metrics = TargetMetrics(
         n_frames_truth=len(gt.frames),
