@@ -47,7 +47,7 @@ from surveil.io.mcap_reader import RunData, read_run
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from pipeline_bench import bench, output_path  # noqa: E402
+from pipeline_bench import add_run_arguments, run_of, scene_names  # noqa: E402
 
 BEFORE_S, AFTER_S, CLIMAX_S, MATCH_S = 0.7, 0.5, 0.3, 1.0
 
@@ -164,24 +164,18 @@ def verdict(event: ActivityEvent, run: RunData, gt: GroundTruth, gate_m: float) 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("names", nargs="*")
-    parser.add_argument("--out", type=Path, default=ROOT / "out" / "bench_synth")
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--rerun", action="store_true", help="run the pipeline again")
-    parser.add_argument("--config", type=Path, help="pipeline settings (TOML) of the run")
+    add_run_arguments(parser)
     parser.add_argument("--gate-m", type=float, default=0.15, help="tracker-actor gate, m")
     parser.add_argument(
         "--trace", action="store_true", help="print each missed event's window frame by frame"
     )
     args = parser.parse_args(argv)
-    names = args.names or sorted(p.stem for p in (ROOT / "recordings").glob("*.toml"))
+    names = scene_names(args)
     totals: Counter = Counter()
     print("| scenario | activity | climax s | actors | seen in 2+ views | verdict | detail |")
     print("|---|---|---|---|---|---|---|")
     for name in names:
-        mcap = output_path(args.out, name, args.config)
-        if args.rerun or not mcap.exists():
-            bench(name, args.out, args.seed, args.config)
+        mcap = run_of(name, args)
         run = read_run(mcap)
         gt = load_ground_truth(args.out / name)
         for event in gt.events:

@@ -32,27 +32,21 @@ from surveil.io.mcap_reader import read_run
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
-from pipeline_bench import bench, output_path  # noqa: E402
+from pipeline_bench import add_run_arguments, run_of, scene_names  # noqa: E402
 
 KINDS = ("not re-acquired", "taken over", "drifted")
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("names", nargs="*")
-    parser.add_argument("--out", type=Path, default=ROOT / "out" / "bench_synth")
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--rerun", action="store_true", help="run the pipeline again")
-    parser.add_argument("--config", type=Path, help="pipeline settings (TOML) of the run")
+    add_run_arguments(parser)
     parser.add_argument("--list", action="store_true", help="print every switch")
     args = parser.parse_args(argv)
-    names = args.names or sorted(p.stem for p in (ROOT / "recordings").glob("*.toml"))
+    names = scene_names(args)
     rows, listing = [], []
     totals: Counter = Counter()
     for name in names:
-        mcap = output_path(args.out, name, args.config)
-        if args.rerun or not mcap.exists():
-            bench(name, args.out, args.seed, args.config)
+        mcap = run_of(name, args)
         gt = load_ground_truth(args.out / name)
         switches = identity_switches(gt, read_run(mcap), EvalConfig())
         kinds = Counter(sw.kind for sw in switches)

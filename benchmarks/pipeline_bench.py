@@ -50,6 +50,30 @@ def bench(
     return report, summary, summary.n_framesets / summary.wall_s
 
 
+def add_run_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of a script that reads the runs this script writes: scenes, output
+    folder, seed, settings, and whether to run again."""
+    parser.add_argument("names", nargs="*")
+    parser.add_argument("--out", type=Path, default=ROOT / "out" / "bench_synth")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--rerun", action="store_true", help="run the pipeline again")
+    parser.add_argument("--config", type=Path, help="pipeline settings (TOML) of the run")
+
+
+def scene_names(args: argparse.Namespace) -> list[str]:
+    """The scenes named, or every bundled recording."""
+    return args.names or sorted(p.stem for p in (ROOT / "recordings").glob("*.toml"))
+
+
+def run_of(name: str, args: argparse.Namespace) -> Path:
+    """The output MCAP of scene ``name`` (:func:`add_run_arguments`), run first when it is
+    missing or ``--rerun`` asks."""
+    mcap = output_path(args.out, name, args.config)
+    if args.rerun or not mcap.exists():
+        bench(name, args.out, args.seed, args.config)
+    return mcap
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("names", nargs="*")
@@ -59,7 +83,7 @@ def main(argv: list[str] | None = None) -> int:
         "--config", type=Path, help="pipeline settings (TOML); output <name>.<stem>.mcap"
     )
     args = parser.parse_args(argv)
-    names = args.names or sorted(p.stem for p in (ROOT / "recordings").glob("*.toml"))
+    names = scene_names(args)
     track_rows, event_rows = [], []
     n_true = n_pred = n_matched = n_dir = n_dir_ok = 0
     for name in names:
