@@ -9,6 +9,10 @@ as a wooden table) or ``BACKGROUND`` (floor, walls: skin-coloured background tha
 silhouette clean-up took in). Prints the share of each class per scene, and of the
 background blobs the share per camera. Blobs are extracted with the true number of people,
 as in ``candidate_misses.py``.
+
+``--changed-shares`` adds a table: per class, the fraction of its blobs with less than
+0.2 / 0.3 / 0.4 / 0.5 of their pixels changed to the background model (foreground or
+shadow): what ``[blobs] min_changed_share`` at that value would drop.
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ import cv2
 import numpy as np
 from front_end import observe_recording
 
+from surveil.blobs.extract import pixel_share
 from surveil.io.ground_truth import MaskClass, load_ground_truth
 from surveil.io.recording import open_recording
 from surveil.pipeline import load_pipeline_config
@@ -30,14 +35,20 @@ from surveil.synth.scene import synthesise
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def blob_classes(rec_dir: Path, config) -> tuple[Counter, Counter]:
-    """(blobs per mask class name, background blobs per camera) over a recording."""
+SHARE_LIMITS = (0.2, 0.3, 0.4, 0.5)
+
+
+def blob_classes(
+    rec_dir: Path, config, shares: dict[str, list[float]] | None = None
+) -> tuple[Counter, Counter]:
+    """(blobs per mask class name, background blobs per camera) over a recording; with
+    ``shares``, each blob's changed share is appended to its class's list."""
     rec = open_recording(rec_dir)
     gt = load_ground_truth(rec_dir)
     n_people = len({lab.split("/")[0] for lab in gt.labels})
     by_class: Counter = Counter()
     background_by_cam: Counter = Counter()
-    for fs, by_name, _ in observe_recording(rec, config, n_people):
+    for fs, by_name, _ in observe_recording(rec, config, n_people, changed=shares is not None):
         if fs.index < config.background.learning_frames:
             continue
         for cam, obs in by_name.items():
@@ -50,10 +61,16 @@ def blob_classes(rec_dir: Path, config) -> tuple[Counter, Counter]:
             # (blob, class) pixel counts in one pass
             counts = np.zeros((len(obs.blobs) + 1, len(MaskClass)), np.int64)
             np.add.at(counts, (labels[inside], classes[inside]), 1)
-            for k in counts[1:].argmax(axis=1)[counts[1:].sum(axis=1) > 0]:
-                by_class[MaskClass(int(k)).name] += 1
+            changed = None
+            if shares is not None:
+                changed = pixel_share(labels, obs.silhouettes.changed, len(obs.blobs) + 1)
+            for b in np.flatnonzero(counts[1:].sum(axis=1) > 0):
+                k = int(counts[b + 1].argmax())
+                by_class[MaskClass(k).name] += 1
                 if k == MaskClass.BACKGROUND:
                     background_by_cam[cam] += 1
+                if changed is not None:
+                    shares.setdefault(MaskClass(k).name, []).append(float(changed[b + 1]))
     return by_class, background_by_cam
 
 
@@ -62,6 +79,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("names", nargs="*")
     parser.add_argument("--out", type=Path, default=ROOT / "out" / "bench_synth")
     parser.add_argument("--config", type=Path, help="pipeline settings (TOML)")
+    parser.add_argument(
+        "--changed-shares",
+        action="store_true",
+        help="also the share of each class's blobs below changed-share limits",
+    )
     args = parser.parse_args(argv)
     config = load_pipeline_config(args.config)
     paths = [ROOT / "recordings" / f"{n}.toml" for n in args.names] or sorted(
@@ -71,14 +93,27 @@ def main(argv: list[str] | None = None) -> int:
     print("Share of the blobs by the ground-truth class under most of their pixels:\n")
     print("| scenario | blobs | " + " | ".join(names) + " | background blobs by camera |")
     print("|---|---|" + "---|" * len(names) + "---|")
+    share_rows = []
     for path in paths:
         rec_dir = args.out / path.stem
         synthesise(path, rec_dir)
-        by_class, by_cam = blob_classes(rec_dir, config)
+        shares: dict[str, list[float]] | None = {} if args.changed_shares else None
+        by_class, by_cam = blob_classes(rec_dir, config, shares)
+        for name in names if shares is not None else ():
+            got = np.array(shares.get(name, []))
+            if len(got):
+                below = " | ".join(f"{np.mean(got < lim):.3f}" for lim in SHARE_LIMITS)
+                share_rows.append(f"| {path.stem} | {name} | {len(got)} | {below} |")
         total = max(sum(by_class.values()), 1)
         cells = " | ".join(f"{by_class[n] / total:.3f}" for n in names)
         cams = ", ".join(f"{c} {by_cam[c]}" for c in sorted(by_cam))
         print(f"| {path.stem} | {sum(by_class.values())} | {cells} | {cams} |", flush=True)
+    if share_rows:
+        print("\nShare of each class's blobs with less than this share of changed pixels:\n")
+        limits = " | ".join(f"< {lim}" for lim in SHARE_LIMITS)
+        print(f"| scenario | class | blobs | {limits} |")
+        print("|---|---|---|" + "---|" * len(SHARE_LIMITS))
+        print("\n".join(share_rows))
     return 0
 
 

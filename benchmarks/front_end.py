@@ -18,6 +18,7 @@ def observe_recording(
     cfg: PipelineConfig,
     n_people: int | None = None,
     max_frames: int | None = None,
+    changed: bool = False,
 ) -> Iterator[tuple[FrameSet, dict[str, CameraObservation], dict[str, list[float]]]]:
     """Per frame set: the frames, every camera's observation (by camera name) and the seconds
     each camera spent in ``background``, ``skin`` and ``blobs``.
@@ -26,6 +27,8 @@ def observe_recording(
     (:func:`learning_frames_after`); blobs are chosen for ``n_people`` (default: the number
     of silhouettes, where a run uses its tracked heads); each camera's skin model is the one
     a run uses: saved beside the rig (``surveil train-skin``), else the default.
+    ``changed``: the silhouettes carry MOG2's changed mask even when ``cfg`` does not ask
+    for it.
     """
     skin_models = load_camera_skin_models(rec.rig_path, rec.camera_names)
     models: dict[str, BackgroundModel] = {}
@@ -44,7 +47,9 @@ def observe_recording(
                     shadow_region=shadow_region(cfg.background, rec.rig, cam, img.shape[:2]),
                 )
             t0 = time.perf_counter()
-            sil = models[cam].step(img, **cfg.background_requests())
+            requests = cfg.background_requests()
+            requests["changed"] |= changed
+            sil = models[cam].step(img, **requests)
             t1 = time.perf_counter()
             skin = skin_models[cam].classify(img)
             t2 = time.perf_counter()

@@ -148,6 +148,8 @@ def test_the_foreground_mask_is_asked_for_by_whichever_stage_reads_it(small_reco
     assert not wants(PipelineConfig())  # both tests are off by default: no mask, no cost
     assert wants(PipelineConfig(candidates=pairs))  # the candidate stage's pair test
     assert wants(PipelineConfig(blobs=BlobConfig(min_foreground_share=0.1)))
+    changed = PipelineConfig(blobs=BlobConfig(min_changed_share=0.3)).background_requests()
+    assert changed["changed"] and not PipelineConfig().background_requests()["changed"]
     # and the blobs of such a run carry their shares
     rec = open_recording(small_recording)
     pipeline = Pipeline.for_recording(rec, PipelineConfig(candidates=pairs), load_rules())

@@ -367,16 +367,16 @@ def extract_blobs(
     )
 
 
-def foreground_share(labels: np.ndarray, foreground: np.ndarray, n_labels: int) -> np.ndarray:
-    """(n_labels,) share of each component's pixels that are ``foreground`` (0 for an empty
+def pixel_share(labels: np.ndarray, mask: np.ndarray, n_labels: int) -> np.ndarray:
+    """(n_labels,) share of each component's pixels that are set in ``mask`` (0 for an empty
     label).
 
     >>> lab = np.array([[1, 1, 2, 2]]); fg = np.array([[True, False, False, False]])
-    >>> foreground_share(lab, fg, 3).tolist()
+    >>> pixel_share(lab, fg, 3).tolist()
     [0.0, 0.5, 0.0]
     """
     area = np.bincount(labels.ravel(), minlength=n_labels)
-    hits = np.bincount(labels[foreground], minlength=n_labels)
+    hits = np.bincount(labels[mask], minlength=n_labels)
     return hits / np.maximum(area, 1)
 
 
@@ -450,9 +450,12 @@ def _extract(
         ok = ok[areas[ok] <= limit]
     shares = None
     if silhouettes.foreground is not None:
-        shares = foreground_share(labels, silhouettes.foreground, n_all)
+        shares = pixel_share(labels, silhouettes.foreground, n_all)
         if cfg.min_foreground_share > 0 and len(ok):
             ok = ok[shares[ok + 1] >= cfg.min_foreground_share]
+    if cfg.min_changed_share > 0 and silhouettes.changed is not None and len(ok):
+        changed_share = pixel_share(labels, silhouettes.changed, n_all)
+        ok = ok[changed_share[ok + 1] >= cfg.min_changed_share]
     edges = silhouettes.background_edges
     if cfg.ghost_edge_ratio > 0 and edges is not None and bgr is not None and len(ok):
         ghosts = revealed_background(

@@ -191,6 +191,15 @@ class BlobConfig:
         min=0.0,
         max=1.0,
     )
+    min_changed_share: float = setting(
+        0.0,
+        "a blob is dropped when less than this share of its pixels changed to the background "
+        "model (foreground or shadow, before the clean-up): skin-coloured furniture and floor "
+        "that the closing took into a silhouette. Unlike min_foreground_share, a dark hand "
+        "that MOG2 calls a shadow of the wall behind it counts as changed (0 = no such test)",
+        min=0.0,
+        max=1.0,
+    )
     ghost_edge_ratio: float = setting(
         0.45,
         "a blob is revealed background (a ghost: skin-coloured furniture under an object just "
@@ -243,7 +252,7 @@ class BlobConfig:
         """What this stage needs from ``BackgroundModel.step`` besides the silhouettes
         (``foreground_share``: a later stage reads ``BlobSet.foreground_share``)."""
         return {
-            "changed": self.change_dilate_px >= 0,
+            "changed": self.change_dilate_px >= 0 or self.min_changed_share > 0,
             "foreground": foreground_share or self.min_foreground_share > 0,
             "background_edges": self.ghost_edge_ratio > 0,
         }

@@ -241,6 +241,33 @@ def test_a_blob_mostly_not_foreground_is_scenery_and_dropped():
     assert unmeasured.foreground_share is None
 
 
+def test_a_blob_that_hardly_changed_is_scenery_and_dropped_shadows_count_as_change():
+    # the table's edge taken into the silhouette did not change; a dark hand in front of a
+    # light wall is a "shadow" to MOG2 (changed, not foreground) and must stay; a hand on the
+    # wooden table changed only where it is unlike the wood, and stays whole
+    sil = _one_person()
+    changed = sil.labels > 0
+    changed[30:40, 40:60] = False  # the table's edge: 200 px, none changed
+    changed[60:70, 30:40] = False  # the hand on the table: 100 px, 40 changed
+    changed[60:70, 30:34] = True
+    foreground = np.zeros_like(changed)  # the dark hand and the table hand: no foreground
+    sil = dataclasses.replace(sil, changed=changed, foreground=foreground)
+    skin = np.zeros((H, W), bool)
+    skin[30:40, 40:60] = True
+    skin[60:70, 30:40] = True
+    skin[10:16, 62:68] = True  # the dark hand, changed as a shadow
+    cfg = BlobConfig(min_blob_area_px=1, silhouette_dilate_px=0, max_blob_area_rel=0.0)
+    kept = extract_blobs(skin, sil, dataclasses.replace(cfg, min_changed_share=0.3))
+    assert sorted(kept.areas_px.tolist()) == [36, 100]
+    assert len(extract_blobs(skin, sil, cfg)) == 3  # 0: no such test
+    assert len(extract_blobs(skin, sil, dataclasses.replace(cfg, min_changed_share=0.5))) == 1
+    # the foreground share test would drop the dark hand with the table's edge
+    fg_test = extract_blobs(skin, sil, dataclasses.replace(cfg, min_foreground_share=0.3))
+    assert len(fg_test) == 0
+    # without a changed mask (the background model was not asked for it) nothing is dropped
+    assert len(extract_blobs(skin, dataclasses.replace(sil, changed=None), cfg)) == 3
+
+
 def _table_with_ghost_and_hand():
     """A skin-coloured table seen whole; an object just taken off it at rows 20-39, cols
     20-39 (a ghost: foreground, skin, its outline an edge of the background image only) and
