@@ -137,6 +137,17 @@ def test_the_distance_cap_follows_the_settings_that_read_the_distances():
     assert silhouette_distance_cap_px(never) is None
 
 
+def test_the_changed_mask_is_asked_for_only_by_the_blob_tests_that_read_it():
+    from surveil.blobs.settings import BlobConfig
+
+    def wants(blobs: BlobConfig) -> bool:
+        return PipelineConfig(blobs=blobs).background_requests()["changed"]
+
+    assert not wants(BlobConfig())  # both tests are off by default: no mask, no cost
+    assert wants(BlobConfig(min_changed_share=0.3))
+    assert wants(BlobConfig(change_dilate_px=1))
+
+
 def test_the_foreground_mask_is_asked_for_by_whichever_stage_reads_it(small_recording):
     from surveil.blobs.settings import BlobConfig
     from surveil.recon.settings import CandidateConfig
@@ -148,8 +159,6 @@ def test_the_foreground_mask_is_asked_for_by_whichever_stage_reads_it(small_reco
     assert not wants(PipelineConfig())  # both tests are off by default: no mask, no cost
     assert wants(PipelineConfig(candidates=pairs))  # the candidate stage's pair test
     assert wants(PipelineConfig(blobs=BlobConfig(min_foreground_share=0.1)))
-    changed = PipelineConfig(blobs=BlobConfig(min_changed_share=0.3)).background_requests()
-    assert changed["changed"] and not PipelineConfig().background_requests()["changed"]
     # and the blobs of such a run carry their shares
     rec = open_recording(small_recording)
     pipeline = Pipeline.for_recording(rec, PipelineConfig(candidates=pairs), load_rules())

@@ -265,7 +265,10 @@ def test_a_blob_that_hardly_changed_is_scenery_and_dropped_shadows_count_as_chan
     fg_test = extract_blobs(skin, sil, dataclasses.replace(cfg, min_foreground_share=0.3))
     assert len(fg_test) == 0
     # without a changed mask (the background model was not asked for it) nothing is dropped
-    assert len(extract_blobs(skin, dataclasses.replace(sil, changed=None), cfg)) == 3
+    unmeasured = dataclasses.replace(sil, changed=None)
+    assert (
+        len(extract_blobs(skin, unmeasured, dataclasses.replace(cfg, min_changed_share=0.3))) == 3
+    )
 
 
 def _table_with_ghost_and_hand():
