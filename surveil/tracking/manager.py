@@ -922,7 +922,7 @@ class MultiTargetTracker:
         is the combined state's premise (section 5.2), so the lost hand (a hand of a person,
         lost at most ``merge_lost_s``) is re-acquired onto a live hand of a person that is
         near its coasted position (last supported position + velocity there x at most
-        ``merge_coast_s``): within ``hand_merge_distance_m``, growing by
+        ``merge_coast_s``): within ``merge_lost_distance_m``, growing by
         ``reacquire_speed_mps`` per second coasted (the velocity estimate lags a hand that
         accelerates). The two then combine in the next frame set and part like any combined
         pair. The live hand must also be within ``merge_reach_m`` of the lost hand's last
@@ -971,7 +971,7 @@ class MultiTargetTracker:
         coast_s = np.minimum([(t_ns - tr.last_good_ns) * 1e-9 for tr in lost], lc.merge_coast_s)
         coasted = last + coast_s[:, None] * np.array([tr.last_good_vel_mps for tr in lost])
         d = np.linalg.norm(coasted[:, None] - live_m[None], axis=2)
-        gate = lc.hand_merge_distance_m + lc.reacquire_speed_mps * coast_s
+        gate = lc.merge_lost_distance_m + lc.reacquire_speed_mps * coast_s
         reach = np.linalg.norm(live_m[None] - last[:, None], axis=2)
         ok = (d < gate[:, None]) & (reach <= lc.merge_reach_m)
         for i, j in zip(*np.nonzero(ok), strict=True):

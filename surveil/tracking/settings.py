@@ -99,9 +99,11 @@ class LifecycleConfig:
         0.10, "two trackers whose estimates come closer than this combine, m", min=0.0
     )
     hand_merge_distance_m: float = setting(
-        0.2,
+        0.3,
         "two hands of people (labelled or waiting for their side) also combine when one of "
-        "them has lost its support this close to the other: their blobs merged, m",
+        "them has lost its support this close to the other: their blobs merged, or the "
+        "hand going behind the other was hidden and its tracker lagged (0.23-0.27 m behind "
+        "on handshake and exchange; docs/tracking.md), m",
         min=0.0,
     )
     separate_distance_m: float = setting(
@@ -241,6 +243,12 @@ class LifecycleConfig:
         "a hand of a person lost at most this long is re-acquired onto another person's hand "
         "(or its own person's other hand) that reaches its coasted position: the two hands' "
         "blobs merged as they met, so its candidate vanished; 0 = off, s",
+        min=0.0,
+    )
+    merge_lost_distance_m: float = setting(
+        0.2,
+        "... when it coasted within this of that hand (growing by reacquire_speed_mps per "
+        "second coasted), m",
         min=0.0,
     )
     merge_coast_s: float = setting(
