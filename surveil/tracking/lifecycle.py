@@ -48,7 +48,14 @@ Choices where the paper is silent, written down here:
   paper's labelling runs once per track; a pair of two people's hands parted the wrong way
   round would otherwise carry both people's labels swapped for the rest of the recording.
 - Losing support beats every other transition (a combined pair with no candidate is lost,
-  both trackers at once, since they share one pooled likelihood level).
+  both trackers at once, since they share one pooled likelihood level), but one: a tracker
+  the manager pairs with another combines even if it runs out of support in the same frame
+  set. The manager pairs a tracker that has lost its support only when it met the other
+  (approached it, or the other came to where it was last seen; one that slid onto it has
+  drifted): its candidate vanished because its blobs merged with the other's, which is the
+  combined state's premise. Before session 53 it was lost, and the meeting opened no event
+  (exchange, seed 0: the taker's hand, hidden going behind the giver's, missed three frame
+  sets while the giver's hand came to it, and was 9 cm from it at the third).
 """
 
 from __future__ import annotations
@@ -113,14 +120,14 @@ def next_phase(phase: Phase, ev: Evidence, cfg: LifecycleConfig) -> Phase:
     match phase:
         case Phase.UNINITIALISED:
             return Phase.UNLABELLED if ev.confirmed else phase
-        case Phase.UNLABELLED | Phase.NORMAL if ev.misses >= cfg.lost_frames:
-            return Phase.LOST
-        case Phase.COMBINED if ev.misses >= cfg.combined_lost_frames:
-            return Phase.LOST
         case Phase.UNLABELLED | Phase.NORMAL if ev.drifted:
             return Phase.LOST
         case Phase.UNLABELLED | Phase.NORMAL if ev.partner_id is not None:
             return Phase.COMBINED
+        case Phase.UNLABELLED | Phase.NORMAL if ev.misses >= cfg.lost_frames:
+            return Phase.LOST
+        case Phase.COMBINED if ev.misses >= cfg.combined_lost_frames:
+            return Phase.LOST
         case Phase.UNLABELLED:
             return Phase.NORMAL if ev.labelled else phase
         case Phase.NORMAL:

@@ -415,14 +415,14 @@ class MultiTargetTracker:
         maybe = hands & (missing[iu] | missing[ju]) & (d[iu, ju] < lc.hand_merge_distance_m)
         for k in np.flatnonzero(maybe & ~close):
             a, b = cand[iu[k]], cand[ju[k]]
-            close[k] = any(self._came(x, y) for x, y in ((a, b), (b, a)) if x.misses > 0)
+            close[k] = any(self._met(x, y) for x, y in ((a, b), (b, a)) if x.misses > 0)
         pairs: dict[int, int] = {}
         for k in np.flatnonzero(close)[np.argsort(d[iu, ju][close], kind="stable")]:
             a, b = cand[iu[k]], cand[ju[k]]
             if a.id in pairs or b.id in pairs or a.id in drifted or b.id in drifted:
                 continue
             bad = [tr for tr in (a, b) if tr.since_miss < lc.drift_window_frames]
-            met = hands[k] and any(self._came(x, y) for x, y in ((a, b), (b, a)) if x in bad)
+            met = hands[k] and any(self._met(x, y) for x, y in ((a, b), (b, a)) if x in bad)
             stray = [tr for tr in (a, b) if tr.stray]
             if len(stray) == 1 and (a if stray[0] is b else b).person > 0:
                 # a tracker that never joined a person meets one that did: it is a duplicate
@@ -455,6 +455,32 @@ class MultiTargetTracker:
         """Whether a was approaching b at ``merge_closing_mps`` or faster before its latest
         miss began (:meth:`_approach_mps`)."""
         return self._approach_mps(a, b) >= self.cfg.lifecycle.merge_closing_mps
+
+    def _met(self, missing: _Track, other: _Track) -> bool:
+        """Whether a tracker that lost its support beside another met it: it was approaching
+        the other before its miss began (:meth:`_came`), or (``met_by_other``) the other,
+        still supported, is coming to where it was last seen (:meth:`_comes_to`)."""
+        return self._came(missing, other) or (
+            self.cfg.lifecycle.met_by_other
+            and other.misses == 0
+            and self._comes_to(other, missing.last_good_m)
+        )
+
+    def _comes_to(self, a: _Track, point_m: np.ndarray) -> bool:
+        """Whether a came closer to ``point_m`` at ``merge_closing_mps`` or faster over the
+        last ``approach_window_s`` (from its estimate history): a supported hand reaching
+        for where the other was last seen (the other, going behind it, was hidden before
+        it moved)."""
+        lc = self.cfg.lifecycle
+        if len(a.history) < 2:
+            return False
+        t1, m1 = a.history[-1]
+        start = t1 - lc.approach_window_s * 1e9
+        t0, m0 = next((t, m) for t, m in a.history if t >= start)
+        if t1 <= t0:
+            return False
+        gain = np.linalg.norm(m0 - point_m) - np.linalg.norm(m1 - point_m)
+        return float(gain) / ((t1 - t0) * 1e-9) >= lc.merge_closing_mps
 
     def _approach_mps(self, a: _Track, b: _Track) -> float:
         """How fast a and b came closer in the last ``approach_window_s`` before a's latest
@@ -1456,7 +1482,8 @@ class MultiTargetTracker:
             if new is Phase.COMBINED and tr.phase is not Phase.COMBINED:
                 # both of a pair must combine; a partner that goes lost instead cancels it
                 partner = self._tracks[pairs[tr.id]]
-                if next_phase(partner.phase, Evidence(misses=partner.misses), lc) is Phase.LOST:
+                partner_ev = Evidence(misses=partner.misses, partner_id=pairs.get(partner.id))
+                if next_phase(partner.phase, partner_ev, lc) is Phase.LOST:
                     new = tr.phase
             unclaimed_s = (t_ns - tr.born_ns) * 1e-9
             if (

@@ -262,6 +262,13 @@ class LifecycleConfig:
         "... and only onto a hand this close to its last supported position, m",
         min=0.0,
     )
+    met_by_other: bool = setting(
+        True,
+        "a hand that lost its support beside another hand has also met it when the other, "
+        "still supported, came towards where it was last seen at merge_closing_mps or faster "
+        "over approach_window_s (the hand going behind the other was hidden before it "
+        "moved: exchange, seed 0)",
+    )
     merge_closing_mps: float = setting(
         0.3,
         "... that it was approaching at least this fast before its miss began (how much "

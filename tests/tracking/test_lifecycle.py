@@ -58,6 +58,16 @@ def test_drift_is_lost_not_combined():
     assert next_phase(Phase.NORMAL, Evidence(partner_id=2, drifted=True), CFG) is Phase.LOST
 
 
+@pytest.mark.parametrize("phase", [Phase.NORMAL, Phase.UNLABELLED])
+def test_a_tracker_paired_as_it_runs_out_of_support_combines(phase):
+    """The manager pairs a tracker that lost its support only when it met the other (its
+    candidate merged into the other's): it combines rather than being lost; unpaired, the
+    same misses lose it."""
+    misses = CFG.lost_frames
+    assert next_phase(phase, Evidence(misses=misses, partner_id=2), CFG) is Phase.COMBINED
+    assert next_phase(phase, Evidence(misses=misses), CFG) is Phase.LOST
+
+
 @pytest.mark.parametrize(
     ("ever_labelled", "lost_for_s", "expected"),
     [
@@ -74,7 +84,5 @@ def test_retirement_beats_reacquisition_and_depends_on_labelling(
     assert next_phase(Phase.LOST, ev, CFG) is expected
 
 
-def test_misses_beat_labelling_and_combining():
-    assert next_phase(Phase.UNLABELLED, Evidence(misses=3, labelled=True, partner_id=1), CFG) is (
-        Phase.LOST
-    )
+def test_misses_beat_labelling():
+    assert next_phase(Phase.UNLABELLED, Evidence(misses=3, labelled=True), CFG) is Phase.LOST

@@ -525,7 +525,40 @@ def test_a_hand_hidden_26_cm_from_the_hand_it_approached_joins_it(rig, rng):
 
     joined = join_frame(LifecycleConfig().hand_merge_distance_m)
     assert joined is not None and joined <= vanish + 1
-    assert join_frame(0.2) is None
+    old = join_frame(0.2)  # later, once the hidden hand's tracker coasts within 0.2 m
+    assert old is None or old > joined
+
+
+def test_a_hand_hidden_before_the_other_comes_to_it_combines_with_it(rig, rng):
+    """The taker's hand is held out, still, and goes out of view (behind the giver's hand,
+    which is coming); the giver's hand reaches where it was last seen (exchange, seed 0).
+    The two were not closing in before the hidden hand's miss began; with met_by_other the
+    other's approach counts and the two combine, without it the hidden hand is lost and
+    the meeting has no combined state."""
+    p = body((2.5, 1.2), 90.0)
+    held = p["head"] + 0.35 * p["fwd"] - [0, 0, 0.5] + 0.05 * p["left"]
+    frames = [[p["head"], p["left_hand"], p["right_hand"]]] * 30
+    frames += [
+        [p["head"], p["left_hand"] + u * (held - p["left_hand"]), p["right_hand"]]
+        for u in np.linspace(0, 1, 9)[1:]
+    ]
+    frames += [[p["head"], held, p["right_hand"]]] * 8
+    near, goal = held - 0.32 * p["left"], held - 0.06 * p["left"]
+    path = [p["right_hand"] + u * (near - p["right_hand"]) for u in np.linspace(0, 1, 9)[1:]]
+    frames += [[p["head"], held, r] for r in path] + [[p["head"], held, near]] * 8
+    # the left hand hides as the right sets off again, at 1.3 m/s
+    path = [near + u * (goal - near) for u in np.linspace(0, 1, 4)[1:]]
+    frames += [[p["head"], r] for r in path] + [[p["head"], goal]] * 6
+
+    def left_story(met_by_other: bool) -> list:
+        lc = LifecycleConfig(retire_unclaimed_s=0.0, met_by_other=met_by_other)
+        out = run(MultiTargetTracker(TrackingConfig(lifecycle=lc), rig, seed=6), frames, rng)
+        left = {s.label: s.target_id for s in out[29].targets}["p1/left_hand"]
+        return [(t.old, t.new) for f in out[30:] for t in f.transitions if t.target_id == left]
+
+    with_rule, without = left_story(True), left_story(False)
+    assert (Phase.NORMAL, Phase.COMBINED) in with_rule, with_rule
+    assert not any(new is Phase.COMBINED for _, new in without), without
 
 
 def test_a_hand_lost_just_before_it_meets_the_other_is_reacquired_onto_it(rig, rng):
@@ -540,10 +573,13 @@ def test_a_hand_lost_just_before_it_meets_the_other_is_reacquired_onto_it(rig, r
         frames.append([p["head"], meet + off * p["left"], meet - off * p["left"]])
 
     def left_hand_story(merge_lost_s: float) -> tuple[list, list]:
-        # at 0.2 m the hands are too far apart to combine when the candidate vanishes: only
-        # the lost-hand path can join them
+        # the paths that combine a hand as it loses its support beside the other are off:
+        # only the lost-hand path can join them
         lc = LifecycleConfig(
-            retire_unclaimed_s=0.0, merge_lost_s=merge_lost_s, hand_merge_distance_m=0.2
+            retire_unclaimed_s=0.0,
+            merge_lost_s=merge_lost_s,
+            hand_merge_distance_m=0.0,
+            met_by_other=False,
         )
         out = run(MultiTargetTracker(TrackingConfig(lifecycle=lc), rig, seed=6), frames, rng)
         ids = {s.label: s.target_id for s in out[34].targets}
