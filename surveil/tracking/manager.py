@@ -1478,13 +1478,8 @@ class MultiTargetTracker:
                 ever_labelled=tr.ever_labelled,
                 label_revoked=tr.phase is Phase.NORMAL and not tr.labelled,
             )
+            # both of a pair combine: pairs are symmetric, and a pairing beats a loss
             new = next_phase(tr.phase, ev, lc)
-            if new is Phase.COMBINED and tr.phase is not Phase.COMBINED:
-                # both of a pair must combine; a partner that goes lost instead cancels it
-                partner = self._tracks[pairs[tr.id]]
-                partner_ev = Evidence(misses=partner.misses, partner_id=pairs.get(partner.id))
-                if next_phase(partner.phase, partner_ev, lc) is Phase.LOST:
-                    new = tr.phase
             unclaimed_s = (t_ns - tr.born_ns) * 1e-9
             if (
                 new is Phase.UNLABELLED
