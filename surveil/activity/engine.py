@@ -530,6 +530,10 @@ class ActivityEngine:
                     del self._pairs[key]  # a limb vanished while close: nothing to decide
                     continue
                 if not ep.combined and d > th.coincidence_m:
+                    if t - ep.climax_ns < _ns(th.min_coincidence_s):
+                        log.debug("%s: %s too brief to meet", ep.rule.rule_id, ep.labels)
+                        del self._pairs[key]
+                        continue
                     ep.separated_ns = t
                 elif t - ep.climax_ns > _ns(th.max_coincidence_s):
                     log.debug("%s: gave up %s (no separation)", ep.rule.rule_id, ep.labels)

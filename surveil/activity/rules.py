@@ -67,6 +67,14 @@ class Thresholds:
         min=0.0,
         max=1.0,
     )
+    min_coincidence_s: float = setting(
+        0.1,
+        "limbs that came within coincidence_m (and were not combined by the tracker) must "
+        "stay there this long, or their meeting is dropped when they part: one frame set's "
+        "blip of a tracker is no contact, s (0 = any)",
+        min=0.0,
+        max=10.0,
+    )
     separation_m: float = setting(
         0.30,
         "the limbs are apart again (post-separation point) at this distance; also the "

@@ -3,6 +3,7 @@ negative cases, a user rule, timeouts, determinism, frame-rate independence, bou
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -23,7 +24,7 @@ from activity_streams import (
 )
 
 from surveil.activity.engine import ActivityEngine
-from surveil.activity.rules import load_rules
+from surveil.activity.rules import default_rules_path, load_rules
 from surveil.datatypes import CarryEstimate, Limb, Phase, TargetSnapshot, TrackFrame
 
 GREEN, BLUE = 120.0, 215.0
@@ -403,6 +404,37 @@ def test_proximity_counts_as_coincidence_without_tracker_join(rules):
     """Hands 0.06 m apart are a coincidence even if the tracker kept two trackers."""
     events = run(rules, two_people(join=False, gap=0.06).stream())
     assert [e.activity for e in events] == ["handshake"]
+
+
+def blip(frames: int, fps: float = 15.0) -> Script:
+    """p1's hands 0.3 m apart in front of the chest; the right hand's estimate jumps to 0.08
+    m from the left one for ``frames`` frame sets at 1 s and back (a tracker slipping onto a
+    stray candidate for a moment), the tracker never combining them."""
+    left, right, near = (0.3, 0.15, 1.1), (0.3, -0.15, 1.1), (0.3, 0.07, 1.1)
+    dt, eps = 1.0 / fps, 1e-3
+    path = keyframes(
+        (1.0 - eps, right),
+        (1.0, near),
+        (1.0 + (frames - 1) * dt, near),
+        (1.0 + frames * dt - eps, right),
+    )
+    return Script([head(1, 1, 0.0), hand(2, 1, L, still(*left)), hand(3, 1, R, path)])
+
+
+@pytest.mark.parametrize("frames", [1, 2])
+def test_a_one_frame_blip_into_coincidence_is_no_clap(tmp_path: Path, rules, frames):
+    """The false clap of three_people (seed 0, 8.33 s; docs/rules.md, "The climax"):
+    two trackers 0.3 m apart, one of them 0.12 m from the other for a single frame set. With
+    ``min_coincidence_s`` (0.1 s) one frame set is no contact, two are; with 0 either is."""
+    events = run(rules, blip(frames).stream())
+    assert [e.activity for e in events] == ([] if frames == 1 else ["clap"])
+    text = default_rules_path().read_text()
+    any_length = tmp_path / "any.toml"
+    any_length.write_text(
+        re.sub(r"(?m)^min_coincidence_s = [0-9.]+", "min_coincidence_s = 0.0", text)
+    )
+    events = run(load_rules([any_length]), blip(frames).stream())
+    assert [e.activity for e in events] == ["clap"]
 
 
 def test_coincidence_without_carry_change_is_not_an_exchange(rules):
