@@ -67,6 +67,28 @@ def relative_gain(frame: np.ndarray, background: np.ndarray, usable: np.ndarray)
     return np.median(b[ok] / f[ok], axis=0).astype(np.float64)
 
 
+def distance_to_zero(mask: np.ndarray) -> np.ndarray:
+    """(H, W) float32 Euclidean distance of every pixel of ``mask`` (uint8) to the nearest
+    zero pixel (``cv2.distanceTransform``, precise), written into a 64-byte aligned array.
+
+    OpenCV's precise transform rounds a few pixels' last bits differently with the
+    alignment of its output; arrays that OpenCV allocates for Python have numpy's
+    alignment, which varies from call to call, and so did the distances (one run of the
+    demo in three differed from the next, session 54). A fixed alignment makes them
+    reproducible.
+
+    >>> m = np.ones((3, 5), np.uint8); m[1, 0] = 0
+    >>> distance_to_zero(m)[1].tolist()
+    [0.0, 1.0, 2.0, 3.0, 4.0]
+    """
+    h, w = mask.shape
+    raw = np.empty(h * w * 4 + 64, np.uint8)
+    start = -raw.ctypes.data % 64
+    dist = raw[start : start + h * w * 4].view(np.float32).reshape(h, w)
+    cv2.distanceTransform(mask, cv2.DIST_L2, cv2.DIST_MASK_PRECISE, dst=dist)
+    return dist
+
+
 def _ellipse(diameter_px: int) -> np.ndarray | None:
     if diameter_px <= 1:
         return None
@@ -111,7 +133,12 @@ def silhouettes_from_mask(
     keep = keep[keep > 0]  # component 0 is the background
     relabel = np.zeros(n_all, np.int32)
     relabel[keep] = np.arange(1, len(keep) + 1, dtype=np.int32)
-    labels = relabel[labels]
+    if n_all > 1:
+        # every component lies in their joint box; outside it the labels are 0 either way
+        x0, y0 = stats[1:, cv2.CC_STAT_LEFT].min(), stats[1:, cv2.CC_STAT_TOP].min()
+        x1 = (stats[1:, cv2.CC_STAT_LEFT] + stats[1:, cv2.CC_STAT_WIDTH]).max()
+        y1 = (stats[1:, cv2.CC_STAT_TOP] + stats[1:, cv2.CC_STAT_HEIGHT]).max()
+        labels[y0:y1, x0:x1] = relabel[labels[y0:y1, x0:x1]]
     top = stats[keep, cv2.CC_STAT_TOP].astype(np.float64)
     bottom = top + stats[keep, cv2.CC_STAT_HEIGHT] - 1
     if not len(keep):
@@ -119,7 +146,7 @@ def silhouettes_from_mask(
         dist = np.full((h, w), far, np.float32)
     elif max_distance_px is None:
         outside = (labels == 0).astype(np.uint8)
-        dist = cv2.distanceTransform(outside, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+        dist = distance_to_zero(outside)
     else:
         dist = _clipped_distance_outside(labels, stats[keep, :4], max_distance_px)
     return Silhouettes(
@@ -147,9 +174,47 @@ def _clipped_distance_outside(
     y1 = min(int((boxes_px[:, 1] + boxes_px[:, 3]).max()) + reach, h)
     dist = np.full((h, w), max_distance_px, np.float32)
     outside = (labels[y0:y1, x0:x1] == 0).view(np.uint8)
-    near = cv2.distanceTransform(outside, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+    near = distance_to_zero(outside)
     np.minimum(near, np.float32(max_distance_px), out=dist[y0:y1, x0:x1])
     return dist
+
+
+def _joint_box(boxes_px: np.ndarray, grow: int, shape: tuple[int, int]) -> tuple[int, ...]:
+    """x0, y0, x1, y1 (end exclusive) of the box around (n >= 1) x, y, w, h boxes widened
+    by ``grow`` and clipped to ``shape`` (H, W)."""
+    h, w = shape
+    x0 = max(int(boxes_px[:, 0].min()) - grow, 0)
+    y0 = max(int(boxes_px[:, 1].min()) - grow, 0)
+    x1 = min(int((boxes_px[:, 0] + boxes_px[:, 2]).max()) + grow, w)
+    y1 = min(int((boxes_px[:, 1] + boxes_px[:, 3]).max()) + grow, h)
+    return x0, y0, x1, y1
+
+
+def upscale_twice(
+    image: np.ndarray, box: tuple[int, ...] | None, outside: float, interpolation: int
+) -> np.ndarray:
+    """``cv2.resize(image, (2 W, 2 H), interpolation)`` computed on ``box`` (x0, y0, x1, y1
+    of ``image``) only; everywhere else the result is ``outside``. Exact when ``image`` is
+    ``outside`` outside the box and (for linear interpolation) on the box's rim of one
+    pixel, or the box meets the image border there: both resizes then read the same
+    neighbours, and at a scale of exactly 2 the interpolation weights depend only on the
+    output pixel's parity. People cover a small part of a frame, so this is a fraction of
+    the cost. None: no box, all ``outside``.
+
+    >>> a = np.zeros((6, 8), np.float32); a[2:4, 3:5] = 4.0
+    >>> full = cv2.resize(a, (16, 12), interpolation=cv2.INTER_LINEAR)
+    >>> bool((upscale_twice(a, (2, 1, 6, 5), 0.0, cv2.INTER_LINEAR) == full).all())
+    True
+    """
+    h, w = image.shape[:2]
+    out = np.full((2 * h, 2 * w, *image.shape[2:]), outside, image.dtype)
+    if box is not None and box[2] > box[0] and box[3] > box[1]:
+        x0, y0, x1, y1 = box
+        crop = np.ascontiguousarray(image[y0:y1, x0:x1])
+        out[2 * y0 : 2 * y1, 2 * x0 : 2 * x1] = cv2.resize(
+            crop, (2 * (x1 - x0), 2 * (y1 - y0)), interpolation=interpolation
+        )
+    return out
 
 
 def _scale_boxes(boxes_px: np.ndarray, sx: float, sy: float) -> np.ndarray:
@@ -414,6 +479,28 @@ class BackgroundModel:
         self._mog.apply(frame, learningRate=min(1.0, self.cfg.learning_rate * self._unlearnt))
         self._unlearnt = 0
 
+    def _upscale(self, small: Silhouettes, cap: float | None) -> tuple[np.ndarray, np.ndarray]:
+        """Labels and (unscaled) outside distances of model-size silhouettes at frame size:
+        nearest and linear resizes, computed near the silhouettes only when the frame is
+        exactly twice the model size and the distances are clipped (:func:`upscale_twice`;
+        beyond ``cap`` + 1 model pixels of every silhouette they are ``cap``)."""
+        size = self.shape[::-1]
+        if cap is None or self.shape != (2 * small.labels.shape[0], 2 * small.labels.shape[1]):
+            return (
+                cv2.resize(small.labels, size, interpolation=cv2.INTER_NEAREST),
+                cv2.resize(small.dist_outside_px, size, interpolation=cv2.INTER_LINEAR),
+            )
+        if small.n == 0:
+            box = reach = None
+        else:
+            box = _joint_box(small.boxes_px, 0, small.labels.shape)
+            # the rim of the clipped transform's box plus one pixel for the interpolation
+            reach = _joint_box(small.boxes_px, math.ceil(cap) + 2, small.labels.shape)
+        return (
+            upscale_twice(small.labels, box, 0, cv2.INTER_NEAREST),
+            upscale_twice(small.dist_outside_px, reach, np.float32(cap), cv2.INTER_LINEAR),
+        )
+
     def step(
         self,
         bgr: np.ndarray,
@@ -497,10 +584,10 @@ class BackgroundModel:
             at = (np.asarray(people_px, np.float64) + 0.5) / (sx, sy) - 0.5
             self._learn_around(small, sil_small.labels, at)
         size = self.shape[::-1]
-        dist = cv2.resize(sil_small.dist_outside_px, size, interpolation=cv2.INTER_LINEAR)
+        labels, dist = self._upscale(sil_small, cap)
         dist *= np.float32(dist_scale)
         return Silhouettes(
-            cv2.resize(sil_small.labels, size, interpolation=cv2.INTER_NEAREST),
+            labels,
             sil_small.top_v_px * sy,
             (sil_small.bottom_v_px + 1.0) * sy - 1.0,
             dist,

@@ -1,14 +1,17 @@
+import cv2
 import numpy as np
 import pytest
 
 from surveil.blobs import BackgroundConfig, BackgroundModel
 from surveil.blobs.background import (
     distance_to_polygon_m,
+    distance_to_zero,
     floor_polygon_m,
     floor_view_mask,
     learning_frames_after,
     relative_gain,
     silhouettes_from_mask,
+    upscale_twice,
 )
 from surveil.camera import look_at
 
@@ -290,6 +293,55 @@ def test_a_distance_cap_changes_no_distance_below_it(rng):
     np.testing.assert_allclose(b.dist_outside_px[near], a.dist_outside_px[near], atol=1e-4)
     with pytest.raises(ValueError, match="distance_cap_px"):
         BackgroundModel(cfg, (H, W), distance_cap_px=0)
+
+
+@pytest.mark.parametrize("where", ["middle", "corner", "none"])
+def test_silhouettes_scaled_back_near_people_only_equal_the_whole_frame_resizes(where):
+    """At model_scale 0.5 labels and clipped distances are resized back to frame size only
+    around the silhouettes: the same arrays, to the bit, as resizing the whole frame."""
+    cfg = BackgroundConfig(model_scale=0.5, min_person_area_px=40)
+    model = BackgroundModel(cfg, (H, W), distance_cap_px=12)
+    mask = np.zeros((H // 2, W // 2), bool)
+    if where == "middle":
+        mask[10:50, 20:30] = True
+        mask[25:55, 50:58] = True
+        mask[28:40, 47:50] = True  # an arm: the two silhouettes' boxes overlap
+    elif where == "corner":
+        mask[0:30, 70:80] = True  # touches the frame border
+    cap = 12 / 2.0
+    small = silhouettes_from_mask(mask, 10, max_distance_px=cap)
+    labels, dist = model._upscale(small, cap)
+    whole = (W, H)
+    np.testing.assert_array_equal(
+        labels, cv2.resize(small.labels, whole, interpolation=cv2.INTER_NEAREST)
+    )
+    np.testing.assert_array_equal(
+        dist, cv2.resize(small.dist_outside_px, whole, interpolation=cv2.INTER_LINEAR)
+    )
+    assert (dist < cap).sum() > 0 if where != "none" else (dist == cap).all()
+
+
+def test_upscale_twice_outside_the_box_is_the_given_value():
+    image = np.zeros((6, 8), np.int32)
+    image[2:4, 3:5] = 7
+    out = upscale_twice(image, (3, 2, 5, 4), -1, cv2.INTER_NEAREST)
+    assert out.shape == (12, 16) and out.dtype == np.int32
+    assert (out[4:8, 6:10] == 7).all() and (out == 7).sum() == 16 and (out == -1).sum() == 176
+    assert (upscale_twice(image, None, 5, cv2.INTER_NEAREST) == 5).all()
+
+
+def test_outside_distances_do_not_depend_on_where_the_array_lands_in_memory():
+    """OpenCV's precise distance transform rounds some pixels' last bit differently with
+    its output's alignment (16-byte steps for numpy's arrays): the same mask gave two
+    different results over 64 calls whose outputs were kept alive. Ours give one."""
+    mask = np.ones((48, 37), np.uint8)
+    cv2.ellipse(mask, (18, 24), (7, 16), 20, 0, 360, 0, -1)
+    kept = [distance_to_zero(mask) for _ in range(64)]
+    assert len({d.tobytes() for d in kept}) == 1
+    assert {d.ctypes.data % 64 for d in kept} == {0}
+    np.testing.assert_allclose(
+        kept[0], cv2.distanceTransform(mask, cv2.DIST_L2, cv2.DIST_MASK_PRECISE), atol=1e-5
+    )
 
 
 @pytest.mark.parametrize("shape", [(480, 640), (240, 320)])
