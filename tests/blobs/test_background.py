@@ -305,7 +305,7 @@ def test_silhouettes_scaled_back_near_people_only_equal_the_whole_frame_resizes(
     if where == "middle":
         mask[10:50, 20:30] = True
         mask[25:55, 50:58] = True
-        mask[28:40, 47:50] = True  # an arm: the two silhouettes' boxes overlap
+        mask[28:40, 47:50] = True  # an arm held out of the second silhouette widens its box
     elif where == "corner":
         mask[0:30, 70:80] = True  # touches the frame border
     cap = 12 / 2.0
