@@ -70,6 +70,30 @@ def _persisted(since_ns: int | None, t_ns: int, need_s: float) -> tuple[int, boo
     return since, (t_ns - since) * 1e-9 >= need_s
 
 
+def _common_history(a: _Track, b: _Track) -> list[tuple[int, np.ndarray, np.ndarray]]:
+    """(t_ns, a's estimate, b's estimate) at every time both trackers' histories hold,
+    oldest first."""
+    hist_b = dict(b.history)
+    return [(t, m, hist_b[t]) for t, m in a.history if t in hist_b]
+
+
+def _window_ends(samples: list[tuple], window_s: float) -> tuple[tuple, tuple] | None:
+    """Of time-ordered samples (time in ns first), the first one within ``window_s`` of the
+    last, and the last; None when there are none or they are not apart in time.
+
+    >>> _window_ends([(0, "a"), (1_000_000_000, "b"), (2_000_000_000, "c")], 1.5)
+    ((1000000000, 'b'), (2000000000, 'c'))
+    >>> _window_ends([(0, "a")], 1.5) is None
+    True
+    """
+    if not samples:
+        return None
+    last = samples[-1]
+    start = last[0] - window_s * 1e9
+    first = next(s for s in samples if s[0] >= start)
+    return (first, last) if last[0] > first[0] else None
+
+
 @dataclass(slots=True, eq=False)
 class _Track:
     """Mutable bookkeeping of one tracker (its particles live in the manager's array)."""
@@ -472,13 +496,10 @@ class MultiTargetTracker:
         for where the other was last seen (the other, going behind it, was hidden before
         it moved)."""
         lc = self.cfg.lifecycle
-        if len(a.history) < 2:
+        ends = _window_ends(list(a.history), lc.approach_window_s)
+        if ends is None:
             return False
-        t1, m1 = a.history[-1]
-        start = t1 - lc.approach_window_s * 1e9
-        t0, m0 = next((t, m) for t, m in a.history if t >= start)
-        if t1 <= t0:
-            return False
+        (t0, m0), (t1, m1) = ends
         gain = np.linalg.norm(m0 - point_m) - np.linalg.norm(m1 - point_m)
         return float(gain) / ((t1 - t0) * 1e-9) >= lc.merge_closing_mps
 
@@ -487,15 +508,11 @@ class MultiTargetTracker:
         miss began, m/s: from the two trackers' estimate histories, not their velocity
         estimates, whose noise alone exceeds ``merge_closing_mps`` now and then for two
         still hands. -inf when the histories do not cover the window."""
-        hist_b = dict(b.history)
-        common = [(t, m, hist_b[t]) for t, m in a.history if t in hist_b and t <= a.miss_from_ns]
-        if not common:
+        common = [c for c in _common_history(a, b) if c[0] <= a.miss_from_ns]
+        ends = _window_ends(common, self.cfg.lifecycle.approach_window_s)
+        if ends is None:
             return -np.inf
-        t1, a1, b1 = common[-1]
-        start = t1 - self.cfg.lifecycle.approach_window_s * 1e9
-        t0, a0, b0 = next(c for c in common if c[0] >= start)
-        if t1 <= t0:
-            return -np.inf
+        (t0, a0, b0), (t1, a1, b1) = ends
         return float(np.linalg.norm(b0 - a0) - np.linalg.norm(b1 - a1)) / ((t1 - t0) * 1e-9)
 
     def _combined_pairs(self) -> list[tuple[_Track, _Track]]:
@@ -1574,8 +1591,7 @@ class MultiTargetTracker:
         trackers' histories when they were at least ``separate_distance_m`` apart (their
         estimates just before combining are too close for a reliable direction); the oldest
         common time if they never were."""
-        hist_b = dict((t, m) for t, m in b.history)
-        common = [(t, m, hist_b[t]) for t, m in a.history if t in hist_b]
+        common = _common_history(a, b)
         if not common:
             return b.mean_m - a.mean_m
         for _, pa, pb in reversed(common):
