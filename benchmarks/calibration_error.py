@@ -4,33 +4,33 @@
 
 A synthetic recording ships the rig it was rendered with (``ground_truth/rig_true.yaml``)
 beside the calibration a user would have (``rig.yaml``, with the scene's calibration error).
-Every ``--every``-th true head and hand position (``ground_truth/limbs.csv``) is projected
-through the true rig and triangulated back through the written one, for every camera pair,
-whether or not the cameras see it. Printed per pair: the median half gap between the two
-lines of sight (what the candidate prior p_t reads; its width ``sigma_gap_m`` is 20 mm) and
-the median distance of the triangulated point from the true one, mm. No image is read: this
-is the calibration alone, before any blob noise.
+Every ``--every``-th true head and hand position (``ground_truth/limbs.csv``, absent people
+left out) is projected through the true rig and triangulated back through the written one,
+for every camera pair, whether or not the cameras see it. Printed per pair: the median half
+gap between the two lines of sight (what the candidate prior p_t reads; its width
+``sigma_gap_m`` is 20 mm) and the median distance of the triangulated point from the true
+one, mm. No image is read: this is the calibration alone, before any blob noise.
 """
 
 from __future__ import annotations
 
 import argparse
-import csv
 from pathlib import Path
 
 import numpy as np
 
 from surveil.io.calibration import load_rig
+from surveil.io.ground_truth import load_ground_truth
 from surveil.recon.triangulate import closest_points
 
 SCENES = "clap demo exchange handshake negative pick_place self_exchange three_people".split()
 
 
 def true_points(recording: Path, every: int) -> np.ndarray:
-    """(N, 3) every ``every``-th true limb position of a recording, m."""
-    with open(recording / "ground_truth" / "limbs.csv", newline="") as f:
-        rows = [r for i, r in enumerate(csv.DictReader(f)) if i % every == 0]
-    return np.array([[float(r["x_m"]), float(r["y_m"]), float(r["z_m"])] for r in rows])
+    """(N, 3) every ``every``-th true limb position of a recording (frames by limbs), m."""
+    positions = load_ground_truth(recording).positions_m.reshape(-1, 3)
+    positions = positions[np.isfinite(positions).all(axis=1)]
+    return positions[::every]
 
 
 def pair_errors(recording: Path, every: int) -> dict[str, tuple[float, float]]:
