@@ -2,6 +2,8 @@
 
     python benchmarks/calibration_error.py [--out out/bench_synth] [--every 7] [NAME ...]
 
+Renders (or reuses) the bundled recordings named, all by default, into ``--out``.
+
 A synthetic recording ships the rig it was rendered with (``ground_truth/rig_true.yaml``)
 beside the calibration a user would have (``rig.yaml``, with the scene's calibration error).
 Every ``--every``-th true head and hand position (``ground_truth/limbs.csv``, absent people
@@ -18,12 +20,12 @@ import argparse
 from pathlib import Path
 
 import numpy as np
+from pipeline_bench import ROOT, scene_names
 
 from surveil.io.calibration import load_rig
 from surveil.io.ground_truth import load_ground_truth
 from surveil.recon.triangulate import closest_points
-
-SCENES = "clap demo exchange handshake negative pick_place self_exchange three_people".split()
+from surveil.synth.scene import synthesise
 
 
 def true_points(recording: Path, every: int) -> np.ndarray:
@@ -57,11 +59,14 @@ def pair_errors(recording: Path, every: int) -> dict[str, tuple[float, float]]:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("names", nargs="*", default=SCENES)
-    ap.add_argument("--out", type=Path, default=Path("out/bench_synth"))
+    ap.add_argument("names", nargs="*")
+    ap.add_argument("--out", type=Path, default=ROOT / "out" / "bench_synth")
     ap.add_argument("--every", type=int, default=7, help="use every n-th ground-truth row")
     args = ap.parse_args()
-    table = {name: pair_errors(args.out / name, args.every) for name in args.names}
+    table = {}
+    for name in scene_names(args):
+        synthesise(ROOT / "recordings" / f"{name}.toml", args.out / name)
+        table[name] = pair_errors(args.out / name, args.every)
     pairs = sorted({p for errs in table.values() for p in errs})
     print("median half gap / median 3-D error per camera pair, mm (written rig vs true rig)\n")
     print("| scenario | " + " | ".join(pairs) + " |")
