@@ -390,6 +390,9 @@ class BlobSet:
         model called foreground (not shadow, before the clean-up); None when not measured.
         Skin-coloured scenery that a silhouette took in is mostly background, a hand or face
         mostly is not (docs/blobs.md, "Foreground share")
+    restored : (B,) bool or None -- True for a blob that the opening would have erased and
+        ``BlobConfig.open_keeps_isolated`` kept whole (a hand seen edge-on, or a fringe of
+        colour along a fold); None when no blob was restored or the setting is off
     """
 
     centroids_px: np.ndarray
@@ -399,6 +402,7 @@ class BlobSet:
     rel_v: np.ndarray
     labels: np.ndarray
     foreground_share: np.ndarray | None = None
+    restored: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = len(self.centroids_px)
@@ -419,6 +423,9 @@ class BlobSet:
         if self.foreground_share is not None:
             require_shape("foreground_share", self.foreground_share, (n,), np.floating)
             readonly(self.foreground_share)
+        if self.restored is not None:
+            require_shape("restored", self.restored, (n,), np.bool_)
+            readonly(self.restored)
 
     def __len__(self) -> int:
         return len(self.centroids_px)

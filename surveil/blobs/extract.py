@@ -26,6 +26,7 @@ ARM_ASPECT = 3.0
 # 0.818 of a person's height, Drillis and Contini); a bare forearm's hand is its end
 # farther from there
 SHOULDER_DROP_REL = 0.18
+LIMBS_PER_PERSON = 3  # a head and two hands: blobs the opening erased only fill these
 MIN_OUTLINE_PX = 5  # fewer outline pixels than this: no verdict, the blob is kept
 
 
@@ -43,6 +44,59 @@ def _open(mask: np.ndarray, diameter_px: int) -> np.ndarray:
         )
         out[y : y + h, x : x + w] = opened > 0
     return out
+
+
+def _open_keeping_isolated(
+    mask: np.ndarray, diameter_px: int, min_area_px: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_open`, except that a connected region of ``mask`` (8-connected) of which the
+    opening leaves something, but less than ``min_area_px``, is kept whole. Returns the
+    result and the kept regions' pixels.
+
+    The opening is there to cut thin bridges between regions (colour fringes joining a head
+    and a hand). A region it would shrink below a blob's size was not joined to anything big:
+    a hand seen edge-on, two or three pixels wide. A region of which nothing survives (a
+    one-pixel fringe) stays erased. A kept region cannot touch what the opening keeps of the
+    other regions (they would be one region), so the result's components are the opened
+    ones plus the kept regions unchanged."""
+    opened = _open(mask, diameter_px)
+    restored = np.zeros_like(mask)
+    x, y, w, h = cv2.boundingRect(mask.view(np.uint8))
+    if not (w and h):
+        return opened, restored
+    box = slice(y, y + h), slice(x, x + w)
+    n, labels = cv2.connectedComponents(
+        np.ascontiguousarray(mask[box]).view(np.uint8), connectivity=8, ltype=cv2.CV_32S
+    )
+    left = np.bincount(labels[opened[box]], minlength=n)
+    keep = (left > 0) & (left < min_area_px)
+    keep[0] = False
+    restored[box] = keep[labels]
+    return opened | restored, restored
+
+
+def _fill_missing_limbs(
+    ok: np.ndarray, restored: np.ndarray, areas: np.ndarray, labels: np.ndarray, sil: np.ndarray
+) -> np.ndarray:
+    """The blobs of ``ok`` (0-based component indices) with the restored ones only where a
+    silhouette has fewer than three plain blobs (a head and two hands): the largest restored
+    blobs of each silhouette fill its missing limbs, the rest are dropped.
+
+    ``restored``: (n_labels,) bool per OpenCV component id; ``sil``: (dilated) silhouette
+    labels, same shape as ``labels``."""
+    inside = labels > 0
+    votes = np.zeros((len(restored), int(sil.max()) + 1), np.int64)
+    np.add.at(votes, (labels[inside], sil[inside]), 1)
+    votes[:, 0] = -1
+    sil_of = votes.argmax(axis=1)
+    plain = ok[~restored[ok + 1]]
+    limbs = np.bincount(sil_of[plain + 1], minlength=votes.shape[1])
+    admitted = []
+    for k in sorted(ok[restored[ok + 1]].tolist(), key=lambda k: (-areas[k], k)):
+        if limbs[sil_of[k + 1]] < LIMBS_PER_PERSON:
+            limbs[sil_of[k + 1]] += 1
+            admitted.append(k)
+    return np.sort(np.concatenate([plain, np.array(admitted, np.int64)]))
 
 
 def split_by_colour(bgr: np.ndarray, mask: np.ndarray, min_delta: float) -> np.ndarray | None:
@@ -364,6 +418,7 @@ def extract_blobs(
         crop.rel_v,
         labels,
         crop.foreground_share,
+        crop.restored,
     )
 
 
@@ -417,8 +472,14 @@ def _extract(
             kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (d, d))
             changed = cv2.dilate(changed.view(np.uint8), kernel).view(bool)
         inside &= changed
+    restored = None
     if radius_px > 0:
-        inside = _open(inside, 2 * radius_px + 1)
+        if cfg.open_keeps_isolated:
+            inside, restored = _open_keeping_isolated(
+                inside, 2 * radius_px + 1, cfg.min_blob_area_px
+            )
+        else:
+            inside = _open(inside, 2 * radius_px + 1)
     n_all, labels, stats, centroids = components_with_stats(inside)
     areas = stats[1:, cv2.CC_STAT_AREA].astype(np.int64)
     ok = np.flatnonzero(areas >= max(cfg.min_blob_area_px, 1))
@@ -468,6 +529,13 @@ def _extract(
             cfg.ghost_edge_ratio,
         )
         ok = ok[~ghosts]
+    restored_comp = None
+    if restored is not None and restored.any():
+        # a restored region is one whole component (pieces of one split by colour keep
+        # the flag)
+        restored_comp = pixel_share(labels, restored, n_all) > 0
+        if len(ok) and restored_comp[ok + 1].any():
+            ok = _fill_missing_limbs(ok, restored_comp, areas, labels, sil)
     n_h = max(n_people_hint if n_people_hint is not None else silhouettes.n, 1)
     n_keep = math.ceil(cfg.blob_excess * 3 * n_h)
     order = ok[np.argsort(-areas[ok], kind="stable")][:n_keep]  # 0-based blob index
@@ -514,6 +582,7 @@ def _extract(
         rel_v,
         out_labels[labels],
         None if shares is None else shares[comp],
+        None if restored_comp is None else restored_comp[comp],
     )
 
 

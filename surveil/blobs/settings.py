@@ -216,6 +216,11 @@ class BlobConfig:
         "heads and hands into one blob",
         min=0,
     )
+    open_keeps_isolated: bool = setting(
+        False,
+        "the opening only cuts: a skin region that touches no other skin and that the opening "
+        "would erase whole (a hand seen edge-on, two or three pixels wide) is kept as it was",
+    )
 
     arm_length_rel: float = setting(
         0.0,

@@ -14,7 +14,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from surveil.camera import Rig
-from surveil.datatypes import CameraObservation, CandidateSet
+from surveil.datatypes import BlobSet, CameraObservation, CandidateSet
 from surveil.recon.settings import CandidateConfig
 from surveil.recon.triangulate import closest_points
 
@@ -142,6 +142,22 @@ def _merge(
         kept.append(i)
         kept_prior.append(min(1.0, pri[i] + boost * pri[absorbed].sum()))
     return order[np.array(kept, dtype=np.intp)], np.array(kept_prior)
+
+
+def _per_blob(blob_sets: Sequence[BlobSet], field: str, default: float | bool) -> np.ndarray:
+    """One optional per-blob field (``foreground_share``, ``restored``) of several blob sets,
+    concatenated; ``default`` for every blob of a set that does not have it.
+
+    >>> a, b = BlobSet.empty((4, 4)), BlobSet.empty((4, 4))
+    >>> _per_blob([a, b], "restored", False).tolist()
+    []
+    """
+    return np.concatenate(
+        [
+            np.full(len(b), default) if getattr(b, field) is None else getattr(b, field)
+            for b in blob_sets
+        ]
+    )
 
 
 def view_support(
@@ -377,13 +393,14 @@ def make_candidates(
         # silhouettes took in, seen from two sides) cross somewhere near the person; a real
         # limb is foreground in at least one of the two views. A blob whose share was not
         # measured counts as foreground.
-        share_all = np.concatenate(
-            [
-                np.ones(len(b)) if b.foreground_share is None else b.foreground_share
-                for b in (by_cam[m].blobs for m in seen)
-            ]
-        )
+        share_all = _per_blob([by_cam[m].blobs for m in seen], "foreground_share", 1.0)
         keep &= np.maximum(share_all[ia], share_all[ib]) >= cfg.min_pair_foreground_share
+    if any(by_cam[m].blobs.restored is not None for m in seen):
+        # a blob the opening would have erased (BlobConfig.open_keeps_isolated) is a hand
+        # seen edge-on or a fringe of colour along a fold: it may pair with a plain blob of
+        # another view, but two of them are too often two fringes
+        restored_all = _per_blob([by_cam[m].blobs for m in seen], "restored", False)
+        keep &= ~(restored_all[ia] & restored_all[ib])
     ia, ib, points, half_gap, p_t = ia[keep], ib[keep], points[keep], half_gap[keep], p_t[keep]
     if cfg.rel_v_to_floor:
         d_v = [floor_relative_v(points, cam_all[g], *rows_all[g].T, rig) for g in (ia, ib)]

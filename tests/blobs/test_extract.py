@@ -96,6 +96,45 @@ def test_opening_cuts_thin_rims_joining_blobs_and_keeps_small_hands():
     assert len(half) == 1
 
 
+def test_open_keeps_isolated_restores_a_hand_seen_edge_on_and_still_cuts_rims():
+    """A hand hanging at the side, seen from the front, is a two-pixel sliver with a
+    three-pixel-wide knuckle: the opening leaves a few pixels of it, too few for a blob, and
+    the hand is lost. ``open_keeps_isolated`` keeps such a region whole; a rim joining a head
+    and a hand (much of the region survives) is still cut, and a one-pixel fringe touching
+    nothing (nothing survives) is still erased."""
+    h, w = 100, REFERENCE_WIDTH_PX
+    person = np.zeros((h, w), bool)
+    person[10:91, 20:80] = True
+    sil = silhouettes_from_mask(person, 10)
+    skin = np.zeros((h, w), bool)
+    skin[15:27, 40:52] = True  # head
+    skin[58:64, 58:64] = True  # a hand, 6 x 6, joined to the head by a rim
+    skin[20:70, 21:23] = True
+    skin[20:22, 21:41] = True
+    skin[68:70, 21:61] = True
+    skin[62:69, 60:62] = True
+    skin[40:56, 74:76] = True  # the other hand edge-on: 2 x 16 px ...
+    skin[47:50, 73:76] = True  # ... with a 3 x 3 knuckle
+    skin[30:50, 30] = True  # a one-pixel fringe, 20 px
+    cfg = BlobConfig(min_blob_area_px=16, silhouette_dilate_px=0, max_blob_area_rel=0.0)
+    unopened = extract_blobs(skin, sil, dataclasses.replace(cfg, open_px=0))
+    assert unopened.areas_px.tolist() == [399, 35, 20]  # head, rim and hand in one blob
+    opened = extract_blobs(skin, sil, cfg)
+    assert opened.areas_px.tolist() == [142, 34]  # the sliver is gone
+    kept = extract_blobs(skin, sil, dataclasses.replace(cfg, open_keeps_isolated=True))
+    assert kept.areas_px.tolist() == [142, 35, 34]
+    assert kept.centroids_px[1] == pytest.approx([74.4, 47.5], abs=0.1)
+    assert kept.centroids_px[[0, 2]] == pytest.approx(opened.centroids_px)
+    assert kept.restored.tolist() == [False, True, False]
+    assert opened.restored is None
+    # restored regions only stand in for missing limbs: with a head and two hands in the
+    # silhouette already, a fold of a shirt (or a third hand) has no place
+    skin[75:81, 40:46] = True
+    full = extract_blobs(skin, sil, dataclasses.replace(cfg, open_keeps_isolated=True))
+    assert full.areas_px.tolist() == [142, 34, 32]
+    assert full.restored.tolist() == [False, False, False]
+
+
 def test_ignores_skin_outside_silhouettes_and_computes_rel_v():
     sil = _one_person()
     skin = np.zeros((H, W), bool)

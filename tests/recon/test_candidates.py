@@ -66,6 +66,7 @@ def _observation(
     rel_v: np.ndarray | None = None,
     silhouette_at_m: np.ndarray | None = None,
     foreground_share: np.ndarray | None = None,
+    restored: np.ndarray | None = None,
 ) -> CameraObservation:
     """Blobs at the projections of ``points_m``; silhouettes are disks around the projections
     of ``silhouette_at_m`` (default: the blob points). rel_v defaults to a function of height,
@@ -83,6 +84,7 @@ def _observation(
         rel_v=rel,
         labels=np.zeros((H, W), np.int32),
         foreground_share=foreground_share,
+        restored=restored,
     )
     return CameraObservation(cam.name, _silhouettes(sil_px), np.zeros((H, W), bool), blobs)
 
@@ -160,6 +162,33 @@ def test_a_pair_of_scenery_blobs_is_dropped_a_camouflaged_hand_is_not(threshold,
     scenery_kept = np.linalg.norm(cs.points_m - scenery, axis=1).min() < 1e-6
     # an unmeasured share counts as foreground
     assert scenery_kept == (threshold == 0 or not measured)
+
+
+@pytest.mark.parametrize(
+    ("restored_in", "found"),
+    [
+        ((), True),
+        (("cam0",), True),  # a restored blob pairs with a plain one
+        (("cam0", "cam1"), False),  # two restored blobs do not pair
+    ],
+)
+def test_two_restored_blobs_do_not_pair(restored_in, found):
+    """Blobs the opening would have erased (``BlobConfig.open_keeps_isolated``) may be a
+    hand seen edge-on or a fringe of colour along a fold: a point seen only as restored
+    blobs is dropped; a third view's plain blob brings it back."""
+    rig = _rig()
+    hand = np.array([3.2, 1.8, 0.95])
+    obs = [
+        _observation(cam, hand[None], restored=np.array([cam.name in restored_in]))
+        for cam in rig.cameras[:2]
+    ]
+
+    def found_hand(cs: CandidateSet) -> bool:
+        return bool(np.any(np.linalg.norm(cs.points_m - hand, axis=1) < 1e-6))
+
+    assert found_hand(make_candidates(obs, rig, CFG)) == found
+    third = _observation(rig.cameras[2], hand[None])
+    assert found_hand(make_candidates([*obs, third], rig, CFG))
 
 
 def test_expected_position_spares_the_dropped_candidate_next_to_it():
