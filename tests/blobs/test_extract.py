@@ -67,20 +67,26 @@ def test_a_dark_head_on_a_skin_coloured_shirt_is_split_off_by_colour(rng):
     )
 
 
-def test_opening_cuts_thin_rims_joining_blobs_and_keeps_small_hands():
-    # a head and a hand joined by a two-pixel rim of colour fringe along the silhouette edge,
-    # in a 640-pixel-wide frame (the opening's kernel size is given for that width)
+def _head_and_hand_joined_by_a_rim(hand_px: int) -> tuple[np.ndarray, np.ndarray]:
+    """A person's mask and skin in a 640-pixel-wide frame (the opening's kernel size is
+    given for that width): a head and a hand_px x hand_px hand ending at (63, 63), joined by
+    a two-pixel rim of colour fringe along the silhouette edge."""
     h, w = 100, REFERENCE_WIDTH_PX
     person = np.zeros((h, w), bool)
     person[10:91, 20:80] = True
-    sil = silhouettes_from_mask(person, 10)
     skin = np.zeros((h, w), bool)
     skin[15:27, 40:52] = True  # head
-    skin[60:64, 60:64] = True  # a small hand, 4 x 4
-    skin[20:70, 21:23] = True  # the rim, two pixels wide
+    skin[64 - hand_px : 64, 64 - hand_px : 64] = True
+    skin[20:70, 21:23] = True  # the rim
     skin[20:22, 21:41] = True
     skin[68:70, 21:61] = True
     skin[62:69, 60:62] = True
+    return person, skin
+
+
+def test_opening_cuts_thin_rims_joining_blobs_and_keeps_small_hands():
+    person, skin = _head_and_hand_joined_by_a_rim(4)
+    sil = silhouettes_from_mask(person, 10)
     cfg = BlobConfig(min_blob_area_px=10, silhouette_dilate_px=0, max_blob_area_rel=0.0)
     plain = dataclasses.replace(cfg, open_px=0)
     assert len(extract_blobs(skin, sil, plain)) == 1  # head, rim and hand in one blob
@@ -102,17 +108,8 @@ def test_open_keeps_isolated_restores_a_hand_seen_edge_on_and_still_cuts_rims():
     the hand is lost. ``open_keeps_isolated`` keeps such a region whole; a rim joining a head
     and a hand (much of the region survives) is still cut, and a one-pixel fringe touching
     nothing (nothing survives) is still erased."""
-    h, w = 100, REFERENCE_WIDTH_PX
-    person = np.zeros((h, w), bool)
-    person[10:91, 20:80] = True
+    person, skin = _head_and_hand_joined_by_a_rim(6)
     sil = silhouettes_from_mask(person, 10)
-    skin = np.zeros((h, w), bool)
-    skin[15:27, 40:52] = True  # head
-    skin[58:64, 58:64] = True  # a hand, 6 x 6, joined to the head by a rim
-    skin[20:70, 21:23] = True
-    skin[20:22, 21:41] = True
-    skin[68:70, 21:61] = True
-    skin[62:69, 60:62] = True
     skin[40:56, 74:76] = True  # the other hand edge-on: 2 x 16 px ...
     skin[47:50, 73:76] = True  # ... with a 3 x 3 knuckle
     skin[30:50, 30] = True  # a one-pixel fringe, 20 px
