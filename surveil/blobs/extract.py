@@ -75,6 +75,21 @@ def _open_keeping_isolated(
     return opened | restored, restored
 
 
+def _majority_silhouette(
+    blob_px: np.ndarray, sil_px: np.ndarray, n_blobs: int, n_sil: int
+) -> np.ndarray:
+    """(n_blobs,) int32: per blob, the silhouette label (>= 1) under most of its pixels
+    (``blob_px``, ``sil_px``: blob index and silhouette label of each pixel; 1 when none).
+
+    >>> _majority_silhouette(np.array([0, 0, 0, 1]), np.array([2, 2, 1, 0]), 2, 3).tolist()
+    [2, 1]
+    """
+    votes = np.zeros((n_blobs, n_sil), np.int64)
+    np.add.at(votes, (blob_px, sil_px), 1)
+    votes[:, 0] = -1
+    return votes.argmax(axis=1).astype(np.int32)
+
+
 def _fill_missing_limbs(
     ok: np.ndarray, restored: np.ndarray, areas: np.ndarray, labels: np.ndarray, sil: np.ndarray
 ) -> np.ndarray:
@@ -85,12 +100,10 @@ def _fill_missing_limbs(
     ``restored``: (n_labels,) bool per OpenCV component id; ``sil``: (dilated) silhouette
     labels, same shape as ``labels``."""
     inside = labels > 0
-    votes = np.zeros((len(restored), int(sil.max()) + 1), np.int64)
-    np.add.at(votes, (labels[inside], sil[inside]), 1)
-    votes[:, 0] = -1
-    sil_of = votes.argmax(axis=1)
+    n_sil = int(sil.max()) + 1
+    sil_of = _majority_silhouette(labels[inside], sil[inside], len(restored), n_sil)
     plain = ok[~restored[ok + 1]]
-    limbs = np.bincount(sil_of[plain + 1], minlength=votes.shape[1])
+    limbs = np.bincount(sil_of[plain + 1], minlength=n_sil)
     admitted = []
     for k in sorted(ok[restored[ok + 1]].tolist(), key=lambda k: (-areas[k], k)):
         if limbs[sil_of[k + 1]] < LIMBS_PER_PERSON:
@@ -543,14 +556,10 @@ def _extract(
         return BlobSet.empty(shape)
     comp = order + 1  # OpenCV component ids
     # majority silhouette label under each kept blob
-    n_sil = int(sil.max()) + 1
     sel = np.isin(labels, comp)
     remap = np.zeros(n_all, np.int64)
     remap[comp] = np.arange(len(comp))
-    votes = np.zeros((len(comp), n_sil), np.int64)
-    np.add.at(votes, (remap[labels[sel]], sil[sel]), 1)
-    votes[:, 0] = -1
-    sil_of = votes.argmax(axis=1).astype(np.int32)
+    sil_of = _majority_silhouette(remap[labels[sel]], sil[sel], len(comp), int(sil.max()) + 1)
     cents = centroids[comp].astype(np.float64)
     top = np.asarray(silhouettes.top_v_px)[sil_of - 1]
     bottom = np.asarray(silhouettes.bottom_v_px)[sil_of - 1]
