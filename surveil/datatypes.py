@@ -390,9 +390,10 @@ class BlobSet:
         model called foreground (not shadow, before the clean-up); None when not measured.
         Skin-coloured scenery that a silhouette took in is mostly background, a hand or face
         mostly is not (docs/blobs.md, "Foreground share")
-    restored : (B,) bool or None -- True for a blob that the opening would have erased and
-        ``BlobConfig.open_keeps_isolated`` kept whole (a hand seen edge-on, or a fringe of
-        colour along a fold); None when no blob was restored or the setting is off
+    restored : (B,) bool or None -- True for a blob that the opening would have shrunk below
+        a blob's size and ``BlobConfig.open_keeps_isolated`` kept whole (a hand seen edge-on,
+        or a fringe of colour along a fold); None when no blob was restored or the setting is
+        off
     """
 
     centroids_px: np.ndarray

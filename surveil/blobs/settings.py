@@ -218,8 +218,9 @@ class BlobConfig:
     )
     open_keeps_isolated: bool = setting(
         False,
-        "the opening only cuts: a skin region that touches no other skin and that the opening "
-        "would erase whole (a hand seen edge-on, two or three pixels wide) is kept as it was",
+        "a skin region that the opening would shrink below min_blob_area_px (a hand seen "
+        "edge-on, two or three pixels wide) is kept whole where its silhouette has fewer than "
+        "three blobs (a head and two hands); two such blobs never pair into a candidate",
     )
 
     arm_length_rel: float = setting(

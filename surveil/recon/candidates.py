@@ -148,9 +148,11 @@ def _per_blob(blob_sets: Sequence[BlobSet], field: str, default: float | bool) -
     """One optional per-blob field (``foreground_share``, ``restored``) of several blob sets,
     concatenated; ``default`` for every blob of a set that does not have it.
 
-    >>> a, b = BlobSet.empty((4, 4)), BlobSet.empty((4, 4))
-    >>> _per_blob([a, b], "restored", False).tolist()
-    []
+    >>> one = np.zeros((1, 2)), np.ones(1, np.int64), np.zeros((1, 4), np.int32)
+    >>> one += np.ones(1, np.int32), np.zeros(1), np.zeros((4, 4), np.int32)
+    >>> flagged = BlobSet(*one, restored=np.array([True]))
+    >>> _per_blob([BlobSet(*one), flagged], "restored", False).tolist()
+    [False, True]
     """
     return np.concatenate(
         [
