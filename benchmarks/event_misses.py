@@ -3,7 +3,7 @@
     python benchmarks/event_misses.py [--out out/bench_synth] [--seed 0] [--rerun] [--config TOML]
         [--trace] [NAME ...]
 
-Reads ``out/bench_synth/<name>[.<config stem>].mcap`` (written by
+Reads ``out/bench_synth/<name>[.<config stem>].seed<N>.mcap`` (written by
 ``benchmarks/pipeline_bench.py``; run here when missing or with ``--rerun``) and the ground
 truth. For every true event, the trackers nearest to its true actors (hands, or a hand and a
 head) are followed from 0.7 s before to 0.5 s after the climax; trackers are matched by

@@ -3,7 +3,7 @@
     python benchmarks/id_switches.py [--out out/bench_synth] [--seed 0] [--rerun]
         [--config TOML] [--list] [NAME ...]
 
-Reads ``out/bench_synth/<name>[.<config stem>].mcap`` (written by
+Reads ``out/bench_synth/<name>[.<config stem>].seed<N>.mcap`` (written by
 ``benchmarks/pipeline_bench.py``; run here when missing or with ``--rerun``) and the ground
 truth, and sorts the switches that ``surveil eval`` counts
 (:func:`surveil.eval.score.identity_switches`) by kind:

@@ -30,9 +30,13 @@ def _f(x, digits=3):
     return "-" if x is None else f"{x:.{digits}f}"
 
 
-def output_path(out_dir: Path, name: str, config: Path | None) -> Path:
-    """Where a run of ``name`` goes: ``<name>.mcap``, or ``<name>.<config stem>.mcap``."""
-    return out_dir / (f"{name}.{config.stem}.mcap" if config else f"{name}.mcap")
+def output_path(out_dir: Path, name: str, config: Path | None, seed: int) -> Path:
+    """Where a run of ``name`` goes: ``<name>.seed<N>.mcap``, or
+    ``<name>.<config stem>.seed<N>.mcap``. The seed is in the name so that runs of other
+    seeds (side by side, or one after the other) never overwrite a run that a later
+    ``--seed N`` without ``--rerun`` reads back."""
+    stem = f"{name}.{config.stem}" if config else name
+    return out_dir / f"{stem}.seed{seed}.mcap"
 
 
 def bench(
@@ -41,7 +45,7 @@ def bench(
     rec_dir = out_dir / name
     synthesise(ROOT / "recordings" / f"{name}.toml", rec_dir)
     rec = open_recording(rec_dir)
-    mcap = output_path(out_dir, name, config)
+    mcap = output_path(out_dir, name, config, seed)
     cfg = dataclasses.replace(load_pipeline_config(config), seed=seed)
     pipeline = Pipeline.for_recording(rec, cfg, load_rules())
     sink = McapSink(McapWriter(mcap, rec.rig, start_time_ns=rec.start_time_ns))
@@ -68,7 +72,7 @@ def scene_names(args: argparse.Namespace) -> list[str]:
 def run_of(name: str, args: argparse.Namespace) -> Path:
     """The output MCAP of scene ``name`` (:func:`add_run_arguments`), run first when it is
     missing or ``--rerun`` asks."""
-    mcap = output_path(args.out, name, args.config)
+    mcap = output_path(args.out, name, args.config, args.seed)
     if args.rerun or not mcap.exists():
         bench(name, args.out, args.seed, args.config)
     return mcap

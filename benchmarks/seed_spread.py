@@ -61,7 +61,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seeds", type=parse_seeds, default=parse_seeds("0-5"))
     parser.add_argument("--out", type=Path, default=ROOT / "out" / "bench_synth")
     parser.add_argument(
-        "--config", type=Path, help="pipeline settings (TOML); output <name>.<stem>.mcap"
+        "--config", type=Path, help="pipeline settings (TOML); output <name>.<stem>.seed<N>.mcap"
     )
     args = parser.parse_args(argv)
     names = args.names or sorted(p.stem for p in (ROOT / "recordings").glob("*.toml"))
