@@ -42,10 +42,10 @@ def pair_errors(recording: Path, every: int) -> dict[str, tuple[float, float]]:
     points = true_points(recording, every)
     out = {}
     names = written.names
+    projected = {name: true[name].project(points) for name in names}
     for i, a in enumerate(names):
         for b in names[i + 1 :]:
-            px_a, depth_a = true[a].project(points)
-            px_b, depth_b = true[b].project(points)
+            (px_a, depth_a), (px_b, depth_b) = projected[a], projected[b]
             seen = (depth_a > 0) & (depth_b > 0)
             o_a, d_a = written[a].backproject(px_a[seen])
             o_b, d_b = written[b].backproject(px_b[seen])
