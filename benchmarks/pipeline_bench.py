@@ -20,7 +20,7 @@ from surveil.activity import load_rules
 from surveil.eval.score import EvalConfig, evaluate
 from surveil.io.mcap_writer import McapSink, McapWriter
 from surveil.io.recording import open_recording
-from surveil.pipeline import Pipeline, load_pipeline_config, run_recording
+from surveil.pipeline import Pipeline, load_pipeline_config, run_recording, use_one_opencv_thread
 from surveil.synth.scene import synthesise
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -44,6 +44,7 @@ def bench(
 ) -> tuple[object, object, float]:
     rec_dir = out_dir / name
     synthesise(ROOT / "recordings" / f"{name}.toml", rec_dir)
+    use_one_opencv_thread()  # as `surveil run`
     rec = open_recording(rec_dir)
     mcap = output_path(out_dir, name, config, seed)
     cfg = dataclasses.replace(load_pipeline_config(config), seed=seed)

@@ -158,8 +158,10 @@ def cmd_run(args: argparse.Namespace) -> ExitCode:
         config_as_dict,
         load_pipeline_config,
         run_recording,
+        use_one_opencv_thread,
     )
 
+    log.debug("OpenCV threads: %d", use_one_opencv_thread())
     cfg = load_pipeline_config(args.config)
     if args.seed is not None:
         cfg = dataclasses.replace(cfg, seed=args.seed)

@@ -13,12 +13,14 @@ import dataclasses
 import json
 import logging
 import math
+import os
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
 
+import cv2
 import numpy as np
 
 from surveil.activity import ActivityEngine, RuleSet
@@ -75,6 +77,27 @@ class PipelineConfig:
         return self.blobs.background_requests(
             foreground_share=self.candidates.min_pair_foreground_share > 0
         )
+
+
+OPENCV_THREADS_ENV = "OPENCV_FOR_THREADS_NUM"
+
+
+def use_one_opencv_thread() -> int:
+    """Let OpenCV run its functions on the calling thread only, unless the environment
+    variable ``OPENCV_FOR_THREADS_NUM`` (OpenCV's own) says otherwise; returns the number of
+    threads OpenCV now uses.
+
+    A frame set's OpenCV calls work on small images (320x240 masks, hand crops), where
+    OpenCV's worker threads cost more in hand-offs than they gain: on the demo the process
+    took about a fifth more CPU time with two threads than with one, for the same wall time
+    (docs/pipeline.md, "Threads"). A run is one core's work; several recordings run side by
+    side as separate processes. The output does not depend on the number of threads
+    (tests/test_pipeline.py). Called by the command line and the benchmarks, not on import:
+    it changes OpenCV's state for the whole process.
+    """
+    if OPENCV_THREADS_ENV not in os.environ:
+        cv2.setNumThreads(1)
+    return int(cv2.getNumThreads())
 
 
 def load_pipeline_config(path: Path | None) -> PipelineConfig:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 
@@ -11,7 +12,14 @@ from surveil.eval.score import EvalConfig, evaluate
 from surveil.io.mcap_reader import read_run
 from surveil.io.mcap_writer import McapSink, McapWriter
 from surveil.io.recording import open_recording
-from surveil.pipeline import Pipeline, PipelineConfig, load_pipeline_config, run_recording
+from surveil.pipeline import (
+    OPENCV_THREADS_ENV,
+    Pipeline,
+    PipelineConfig,
+    load_pipeline_config,
+    run_recording,
+    use_one_opencv_thread,
+)
 from surveil.tracking import LabellingConfig, TrackingConfig
 
 
@@ -50,12 +58,34 @@ def test_run_tracks_heads_and_hands_against_the_ground_truth(first_run, small_re
     assert t.head_error_mm_mean < 120 and t.hand_error_mm_median < 120
 
 
-def test_same_seed_gives_the_same_output(first_run, small_recording, tmp_path):
+def test_same_seed_gives_the_same_output_whatever_opencvs_thread_count(
+    first_run, small_recording, tmp_path
+):
+    # machines differ in cores, and OpenCV parallelises some calls (connected components,
+    # resizes): the events must not depend on it
     _, a = first_run
-    _, b = _run(small_recording, tmp_path / "b.mcap")
+    before = cv2.getNumThreads()
+    cv2.setNumThreads(2 if before == 1 else 1)
+    try:
+        _, b = _run(small_recording, tmp_path / "b.mcap")
+    finally:
+        cv2.setNumThreads(before)
     np.testing.assert_array_equal(a.target_pos_m, b.target_pos_m)
     np.testing.assert_array_equal(a.target_label, b.target_label)
+    np.testing.assert_array_equal(a.candidate_pos_m, b.candidate_pos_m)
     assert a.events == b.events
+
+
+def test_one_opencv_thread_unless_the_environment_says_otherwise(monkeypatch):
+    before = cv2.getNumThreads()
+    try:
+        cv2.setNumThreads(2)
+        monkeypatch.setenv(OPENCV_THREADS_ENV, "2")
+        assert use_one_opencv_thread() == 2
+        monkeypatch.delenv(OPENCV_THREADS_ENV)
+        assert use_one_opencv_thread() == 1 == cv2.getNumThreads()
+    finally:
+        cv2.setNumThreads(before)
 
 
 def test_config_file_overrides_and_rejects_unknown_keys(tmp_path):
