@@ -13,6 +13,12 @@ as in ``candidate_misses.py``.
 ``--changed-shares`` adds a table: per class, the fraction of its blobs with less than
 0.2 / 0.3 / 0.4 / 0.5 of their pixels changed to the background model (foreground or
 shadow): what ``[blobs] min_changed_share`` at that value would drop.
+
+``--flat-cores`` adds a table: per class, the fraction of its blobs with fewer than
+``FLAT_MIN_PX`` pixels whose chroma is flat (the magnitude of the 3x3 Sobel gradient of
+YCrCb's Cr and Cb below 30 / 40 / 50): what a test that asks a blob for a flat core
+would drop. Colour fringes (a shirt blended with the wall, JPEG chroma bleeding) lie on
+chroma edges across their whole width; a hand has a flat inside.
 """
 
 from __future__ import annotations
@@ -36,13 +42,33 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 SHARE_LIMITS = (0.2, 0.3, 0.4, 0.5)
+FLAT_LIMITS = (30.0, 40.0, 50.0)
+FLAT_MIN_PX = 3
+
+
+def flat_pixels(img: np.ndarray, labels: np.ndarray, box: np.ndarray, blob: int) -> np.ndarray:
+    """(len(FLAT_LIMITS),) how many of blob ``blob``'s pixels (``labels == blob + 1``,
+    bounding box ``box`` x, y, w, h) have a chroma gradient below each limit."""
+    x, y, w, h = (int(v) for v in box)
+    x0, y0 = max(0, x - 2), max(0, y - 2)
+    sub = cv2.cvtColor(img[y0 : y + h + 2, x0 : x + w + 2], cv2.COLOR_BGR2YCrCb)
+    sub = sub[..., 1:].astype(np.float32)
+    gx = cv2.Sobel(sub, cv2.CV_32F, 1, 0, ksize=3)
+    gy = cv2.Sobel(sub, cv2.CV_32F, 0, 1, ksize=3)
+    grad = np.sqrt((gx**2 + gy**2).sum(axis=-1))
+    inside = labels[y0 : y + h + 2, x0 : x + w + 2] == blob + 1
+    return (grad[inside][:, None] < np.array(FLAT_LIMITS)).sum(axis=0)
 
 
 def blob_classes(
-    rec_dir: Path, config, shares: dict[str, list[float]] | None = None
+    rec_dir: Path,
+    config,
+    shares: dict[str, list[float]] | None = None,
+    flat: dict[str, list[np.ndarray]] | None = None,
 ) -> tuple[Counter, Counter]:
     """(blobs per mask class name, background blobs per camera) over a recording; with
-    ``shares``, each blob's changed share is appended to its class's list."""
+    ``shares``, each blob's changed share is appended to its class's list; with ``flat``,
+    its :func:`flat_pixels`."""
     rec = open_recording(rec_dir)
     gt = load_ground_truth(rec_dir)
     n_people = len({lab.split("/")[0] for lab in gt.labels})
@@ -71,6 +97,9 @@ def blob_classes(
                     background_by_cam[cam] += 1
                 if changed is not None:
                     shares.setdefault(MaskClass(k).name, []).append(float(changed[b + 1]))
+                if flat is not None:
+                    got = flat_pixels(fs.images[cam], labels, obs.blobs.bboxes_px[b], int(b))
+                    flat.setdefault(MaskClass(k).name, []).append(got)
     return by_class, background_by_cam
 
 
@@ -84,6 +113,11 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="also the share of each class's blobs below changed-share limits",
     )
+    parser.add_argument(
+        "--flat-cores",
+        action="store_true",
+        help="also the share of each class's blobs without a flat-chroma core",
+    )
     args = parser.parse_args(argv)
     config = load_pipeline_config(args.config)
     paths = [ROOT / "recordings" / f"{n}.toml" for n in args.names] or sorted(
@@ -93,12 +127,18 @@ def main(argv: list[str] | None = None) -> int:
     print("Share of the blobs by the ground-truth class under most of their pixels:\n")
     print("| scenario | blobs | " + " | ".join(names) + " | background blobs by camera |")
     print("|---|---|" + "---|" * len(names) + "---|")
-    share_rows = []
+    share_rows, flat_rows = [], []
     for path in paths:
         rec_dir = args.out / path.stem
         synthesise(path, rec_dir)
         shares: dict[str, list[float]] | None = {} if args.changed_shares else None
-        by_class, by_cam = blob_classes(rec_dir, config, shares)
+        flat: dict[str, list[np.ndarray]] | None = {} if args.flat_cores else None
+        by_class, by_cam = blob_classes(rec_dir, config, shares, flat)
+        for name in names if flat is not None else ():
+            counts = np.array(flat.get(name, []))
+            if len(counts):
+                below = " | ".join(f"{v:.3f}" for v in np.mean(counts < FLAT_MIN_PX, axis=0))
+                flat_rows.append(f"| {path.stem} | {name} | {len(counts)} | {below} |")
         for name in names if shares is not None else ():
             got = np.array(shares.get(name, []))
             if len(got):
@@ -114,6 +154,15 @@ def main(argv: list[str] | None = None) -> int:
         print(f"| scenario | class | blobs | {limits} |")
         print("|---|---|---|" + "---|" * len(SHARE_LIMITS))
         print("\n".join(share_rows))
+    if flat_rows:
+        print(
+            f"\nShare of each class's blobs with fewer than {FLAT_MIN_PX} pixels of flat chroma"
+            " (Sobel magnitude of Cr, Cb below the limit):\n"
+        )
+        limits = " | ".join(f"< {lim:g}" for lim in FLAT_LIMITS)
+        print(f"| scenario | class | blobs | {limits} |")
+        print("|---|---|---|" + "---|" * len(FLAT_LIMITS))
+        print("\n".join(flat_rows))
     return 0
 
 
