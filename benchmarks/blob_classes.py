@@ -103,6 +103,18 @@ def blob_classes(
     return by_class, background_by_cam
 
 
+def _class_rows(stem: str, names: list[str], by_class: dict | None, shares_below) -> list[str]:
+    """Table rows, one per class with values in ``by_class`` (None: no rows): the class's
+    blob count and ``shares_below`` of its values (one share per limit)."""
+    rows = []
+    for name in names if by_class is not None else ():
+        got = np.array(by_class.get(name, []))
+        if len(got):
+            cells = " | ".join(f"{v:.3f}" for v in shares_below(got))
+            rows.append(f"| {stem} | {name} | {len(got)} | {cells} |")
+    return rows
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("names", nargs="*")
@@ -134,16 +146,12 @@ def main(argv: list[str] | None = None) -> int:
         shares: dict[str, list[float]] | None = {} if args.changed_shares else None
         flat: dict[str, list[np.ndarray]] | None = {} if args.flat_cores else None
         by_class, by_cam = blob_classes(rec_dir, config, shares, flat)
-        for name in names if flat is not None else ():
-            counts = np.array(flat.get(name, []))
-            if len(counts):
-                below = " | ".join(f"{v:.3f}" for v in np.mean(counts < FLAT_MIN_PX, axis=0))
-                flat_rows.append(f"| {path.stem} | {name} | {len(counts)} | {below} |")
-        for name in names if shares is not None else ():
-            got = np.array(shares.get(name, []))
-            if len(got):
-                below = " | ".join(f"{np.mean(got < lim):.3f}" for lim in SHARE_LIMITS)
-                share_rows.append(f"| {path.stem} | {name} | {len(got)} | {below} |")
+        share_rows += _class_rows(
+            path.stem, names, shares, lambda got: [np.mean(got < lim) for lim in SHARE_LIMITS]
+        )
+        flat_rows += _class_rows(
+            path.stem, names, flat, lambda got: np.mean(got < FLAT_MIN_PX, axis=0)
+        )
         total = max(sum(by_class.values()), 1)
         cells = " | ".join(f"{by_class[n] / total:.3f}" for n in names)
         cams = ", ".join(f"{c} {by_cam[c]}" for c in sorted(by_cam))
