@@ -91,17 +91,15 @@ def _majority_silhouette(
 
 
 def _fill_missing_limbs(
-    ok: np.ndarray, restored: np.ndarray, areas: np.ndarray, labels: np.ndarray, sil: np.ndarray
+    ok: np.ndarray, restored: np.ndarray, areas: np.ndarray, sil_of: np.ndarray
 ) -> np.ndarray:
     """The blobs of ``ok`` (0-based component indices) with the restored ones only where a
     silhouette has fewer than three plain blobs (a head and two hands): the largest restored
     blobs of each silhouette fill its missing limbs, the rest are dropped.
 
-    ``restored``: (n_labels,) bool per OpenCV component id; ``sil``: (dilated) silhouette
-    labels, same shape as ``labels``."""
-    inside = labels > 0
-    n_sil = int(sil.max()) + 1
-    sil_of = _majority_silhouette(labels[inside], sil[inside], len(restored), n_sil)
+    ``restored``: (n_labels,) bool per OpenCV component id; ``sil_of``: (n_labels,) the
+    majority silhouette of each component (:func:`_majority_silhouette`)."""
+    n_sil = int(sil_of.max()) + 1
     plain = ok[~restored[ok + 1]]
     limbs = np.bincount(sil_of[plain + 1], minlength=n_sil)
     admitted = []
@@ -542,13 +540,17 @@ def _extract(
             cfg.ghost_edge_ratio,
         )
         ok = ok[~ghosts]
-    restored_comp = None
+    restored_comp = sil_of_all = None
     if restored is not None and restored.any():
         # a restored region is one whole component (pieces of one split by colour keep
         # the flag)
         restored_comp = pixel_share(labels, restored, n_all) > 0
         if len(ok) and restored_comp[ok + 1].any():
-            ok = _fill_missing_limbs(ok, restored_comp, areas, labels, sil)
+            inside = labels > 0
+            sil_of_all = _majority_silhouette(
+                labels[inside], sil[inside], n_all, int(sil.max()) + 1
+            )
+            ok = _fill_missing_limbs(ok, restored_comp, areas, sil_of_all)
     n_h = max(n_people_hint if n_people_hint is not None else silhouettes.n, 1)
     n_keep = math.ceil(cfg.blob_excess * 3 * n_h)
     order = ok[np.argsort(-areas[ok], kind="stable")][:n_keep]  # 0-based blob index
@@ -559,7 +561,10 @@ def _extract(
     sel = np.isin(labels, comp)
     remap = np.zeros(n_all, np.int64)
     remap[comp] = np.arange(len(comp))
-    sil_of = _majority_silhouette(remap[labels[sel]], sil[sel], len(comp), int(sil.max()) + 1)
+    if sil_of_all is None:
+        sil_of = _majority_silhouette(remap[labels[sel]], sil[sel], len(comp), int(sil.max()) + 1)
+    else:  # voted already, over every component
+        sil_of = sil_of_all[comp]
     cents = centroids[comp].astype(np.float64)
     top = np.asarray(silhouettes.top_v_px)[sil_of - 1]
     bottom = np.asarray(silhouettes.bottom_v_px)[sil_of - 1]
