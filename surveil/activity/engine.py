@@ -769,6 +769,24 @@ class ActivityEngine:
                     key = (key[0], heir.target_id)
                     self._stills[key] = st
                     st.hand_id, snap = heir.target_id, heir
+            if (
+                st.apart_ns is None
+                and snap is not None
+                and snap.phase is Phase.COMBINED
+                and any(
+                    o.phase is Phase.COMBINED
+                    and o.person not in (0, snap.person)
+                    and o.limb in (Limb.LEFT_HAND, Limb.RIGHT_HAND)
+                    and float(np.linalg.norm(o.mean_m - snap.mean_m)) < th.separation_m
+                    for o in cur.targets.values()
+                )
+            ):
+                # another person's hand met it at the still point before it left: a handover
+                # whose taker came after the giver's hand had stopped, not the scene
+                log.debug("%s: %s met another person's hand", st.rule.rule_id, st.label)
+                del self._stills[key]
+                self._still_disarmed[key] = st.point_m
+                continue
             if st.apart_ns is None and snap is not None:
                 if float(np.linalg.norm(snap.mean_m - st.point_m)) >= th.separation_m:
                     st.apart_ns = t

@@ -27,7 +27,11 @@ midpoint from the head, along the normal of the hand-to-hand line, beyond a dead
 the direction to the nearest other person (interacting people face each other). With facing
 f = (fx, fy), the person's left is (-fy, fx); of two hands, the one farther left is the left
 hand; a lone hand is decided by the side it is on. Left / right is decided once (when the
-facing evidence is strong enough, or after a maximum wait) and then kept.
+facing evidence is strong enough, or after a maximum wait) and revised only when the facing
+says for a while that they are swapped. Where the face is seen adds a cue (:func:`face_cue`).
+The angle of the facing comes from the *body axis* once that is known: the silhouettes'
+widths across the shoulders in three or more views (:func:`silhouette_width_m`,
+:func:`body_axis_cue`); the cues above give only its sign (:func:`facing_on_axis`).
 
 **Angle rule (section 7.1)** -- when a combined pair separates, the vector joining the two
 targets just before they combined is compared with the vector joining the two modes after
@@ -227,6 +231,33 @@ def across_body(
     return (np.sign(lat) == -np.sign(lat_c)) & (np.abs(lat) >= side_m)
 
 
+def same_side(
+    a_m: np.ndarray,
+    b_m: np.ndarray,
+    head_m: np.ndarray,
+    facing_xy: np.ndarray,
+    side_m: float,
+) -> bool:
+    """Whether two points are both at least ``side_m`` to the same side of a person's head
+    (along the facing direction's left axis; False when ``side_m`` is 0).
+
+    Two hands of one person on one side of the body, one above the other, are rarely both
+    hands: the upper one is a shirt region by the elbow (three_people: the colour fringe
+    where a hanging red sleeve meets the wall seen between arm and body, 25 cm above the
+    hand, seen alike by every camera).
+
+    >>> head, facing = np.array([0.0, 0.0, 1.7]), np.array([1.0, 0.0])
+    >>> same_side(np.array([0.0, -0.27, 0.8]), np.array([0.0, -0.25, 1.05]), head, facing, 0.1)
+    True
+    >>> same_side(np.array([0.0, -0.27, 0.8]), np.array([0.0, 0.2, 1.05]), head, facing, 0.1)
+    False
+    """
+    if side_m <= 0:
+        return False
+    lat = lateral_offsets_m(np.array([a_m, b_m], dtype=np.float64), head_m, facing_xy)
+    return bool(np.all(np.abs(lat) >= side_m) and np.sign(lat[0]) == np.sign(lat[1]))
+
+
 def decide_left_right(
     hands_m: np.ndarray, head_m: np.ndarray, facing_xy: np.ndarray
 ) -> tuple[Limb, ...]:
@@ -263,6 +294,12 @@ def decide_left_right(
     raise ValueError(f"hands_m must hold 1 or 2 hands, got {len(hands_m)}")
 
 
+# two hands nearer than this (3D) are together: their midpoint's offset from the head is
+# the forward excursion; farther apart they must lie more across than one above the other
+# for the normal of the line between them to say where the front is, m
+HANDS_TOGETHER_M = 0.1
+
+
 def facing_cues(
     head_m: np.ndarray,
     head_velocity_mps: np.ndarray,
@@ -275,8 +312,9 @@ def facing_cues(
     Cues (see the module docstring): walking direction (unit, weight 0.3 when the head moves
     faster than ``walk_speed_mps``); the two hands' forward excursion (unit normal of the
     hand-to-hand line towards their midpoint, weight growing from 0 at 5 cm to 1 at 15 cm of
-    offset); the direction to the nearest other head within ``social_range_m`` (weight
-    ``social_weight``).
+    offset; no hand cue for two hands one above the other, more than
+    :data:`HANDS_TOGETHER_M` apart and less across); the direction to the nearest other
+    head within ``social_range_m`` (weight ``social_weight``).
 
     Parameters
     ----------
@@ -304,16 +342,17 @@ def facing_cues(
         ev += 0.3 * v / speed
     hands_m = np.asarray(hands_m, dtype=np.float64).reshape(-1, 3)
     if len(hands_m) == 2:
-        across = hands_m[0, :2] - hands_m[1, :2]
-        n_across = float(np.linalg.norm(across))
+        apart = hands_m[0] - hands_m[1]
+        n_across = float(np.linalg.norm(apart[:2]))
         mid = hands_m[:, :2].mean(axis=0) - head_m[:2]
-        if n_across > 1e-3:
-            normal = np.array([-across[1], across[0]]) / n_across
+        fwd, normal = 0.0, np.zeros(2)
+        if n_across >= max(HANDS_TOGETHER_M, abs(apart[2])):
+            normal = np.array([-apart[1], apart[0]]) / n_across
             fwd = float(mid @ normal)
-        else:  # hands together: the midpoint offset itself
-            n_mid = float(np.linalg.norm(mid))
-            normal = mid / n_mid if n_mid > 0 else np.zeros(2)
-            fwd = n_mid
+        elif np.linalg.norm(apart) < HANDS_TOGETHER_M:  # the midpoint offset itself
+            fwd = float(np.linalg.norm(mid))
+            normal = mid / fwd if fwd > 0 else normal
+        # else one above the other (a hand and a point by its elbow): no side to face
         ev += np.sign(fwd) * normal * np.clip((abs(fwd) - 0.05) / 0.1, 0.0, 1.0)
     others = np.asarray(other_heads_m, dtype=np.float64).reshape(-1, 3)
     if len(others):
@@ -382,6 +421,178 @@ def face_cue(
         b = np.linalg.lstsq(design, s, rcond=None)[0][1:]
     length = float(np.linalg.norm(b))
     return weight * (b if length <= 1.0 else b / length)
+
+
+# least spread of the views' doubled viewing angles (smallest eigenvalue of their
+# covariance, 0-0.5) for a full fit of the width model; below it the views are degenerate
+# (measured: 0.001 with four corner cameras and a person in the middle, 0.01-0.37 elsewhere)
+AXIS_SPREAD_MIN = 0.005
+
+# a side of a silhouette's run that comes this near another person's body axis measures
+# that body too, m (the other head's tracking error, a neck; benchmarks/facing_bench.py on
+# three_people: any value 0-0.15 gives the same, 0.25 loses half-widths that were right)
+OTHER_BODY_CORE_M = 0.1
+
+# rows below the head centre where the shoulders and upper chest are, for people of
+# 1.5-1.9 m standing or seated: a body is widest across them and shallowest front to back
+BODY_AXIS_DROPS_M = (0.22, 0.28, 0.34)
+
+
+def silhouette_width_m(
+    labels: np.ndarray,
+    camera: Camera,
+    points_m: np.ndarray,
+    max_width_m: float,
+    others_m: np.ndarray | None = None,
+) -> float:
+    """How wide the silhouette under ``points_m`` is in ``camera``, metres: the median over
+    the points of the run of the point's silhouette along its image row, scaled by the
+    point's depth. Where one side of the run comes within :data:`OTHER_BODY_CORE_M` of
+    another person's body axis (two silhouettes merged, or one person in front of the
+    other), the width is twice the other side's half, from the point to its edge. NaN
+    unless two or more points give a width: a point behind the camera, off the image or off
+    every silhouette gives none, and so does a run that reaches the image border (the body
+    is cut), is wider than ``max_width_m`` or comes near other bodies on both sides.
+
+    Parameters
+    ----------
+    labels : (H, W) int -- silhouette labels (``Silhouettes.labels``; 0 = background)
+    camera : Camera
+    points_m : (R, 3) float64 -- points on the body's vertical axis (:data:`BODY_AXIS_DROPS_M`
+        below the head), world metres
+    max_width_m : float
+    others_m : (Q, 3) float64, optional -- one point on each other person's body axis
+
+    Examples
+    --------
+    >>> cam = Camera("c", 640, 480, [[500, 0, 320], [0, 500, 240], [0, 0, 1]],
+    ...              np.zeros(5), np.eye(3), np.zeros(3))
+    >>> labels = np.zeros((480, 640), np.int32)
+    >>> labels[200:300, 270:370] = 1                       # 100 px wide at 2 m: 0.4 m
+    >>> pts = np.array([[0.0, 0.0, 2.0], [0.0, 0.1, 2.0]])
+    >>> round(silhouette_width_m(labels, cam, pts, 0.8), 3)
+    0.4
+    >>> labels[200:300, 370:420] = 1                       # another person merged on the right
+    >>> other = np.array([[0.3, 0.0, 2.0]])
+    >>> round(silhouette_width_m(labels, cam, pts, 0.8, others_m=other), 3)  # 2 x 50.5 px
+    0.404
+    """
+    points_m = np.asarray(points_m, dtype=np.float64).reshape(-1, 3)
+    others_m = np.zeros((0, 3)) if others_m is None else np.asarray(others_m, np.float64)
+    px, depth = camera.project(np.vstack([points_m, others_m.reshape(-1, 3)]))
+    fx = float(camera.K[0, 0])
+    h, w = labels.shape
+    n = len(points_m)
+    near = [  # (first, last) image column of each other body's core
+        (u - OTHER_BODY_CORE_M * fx / z, u + OTHER_BODY_CORE_M * fx / z)
+        for (u, _), z in zip(px[n:].tolist(), depth[n:].tolist(), strict=True)
+        if z > 0
+    ]
+    widths = []
+    for (u, v), z in zip(px[:n].tolist(), depth[:n].tolist(), strict=True):
+        col, row = round(u), round(v)
+        if z <= 0 or not (0 <= col < w and 0 <= row < h) or labels[row, col] == 0:
+            continue
+        other = labels[row] != labels[row, col]
+        before = np.flatnonzero(other[:col])
+        after = np.flatnonzero(other[col:])
+        if not len(before) or not len(after):
+            continue
+        first, last = int(before[-1]) + 1, int(after[0]) + col - 1
+        # a side that reaches another body measures that body: the other side, doubled
+        left_free = not any(a <= col and b >= first for a, b in near)
+        right_free = not any(a <= last and b >= col for a, b in near)
+        if left_free and right_free:
+            width_px = last - first + 1
+        elif left_free or right_free:
+            width_px = 2 * (col - first + 0.5 if left_free else last - col + 0.5)
+        else:
+            continue
+        width = width_px * z / fx
+        if width <= max_width_m:
+            widths.append(width)
+    if len(widths) < 2:
+        return float("nan")
+    widths.sort()
+    mid = len(widths) // 2
+    return widths[mid] if len(widths) % 2 else 0.5 * (widths[mid - 1] + widths[mid])
+
+
+def body_axis_cue(
+    head_m: np.ndarray, cameras_m: np.ndarray, widths_m: np.ndarray, contrast: float
+) -> np.ndarray:
+    """One frame's evidence (2,) on the body's front-back axis, as a doubled angle
+    ``(cos 2 phi, sin 2 phi)`` times a confidence in [0, 1]: an axis has no sign.
+
+    A body is wider across the shoulders than front to back. Seen along a horizontal
+    direction at angle ``beta``, an ellipse of half-axes ``a`` (across) and ``b`` (front to
+    back) whose front faces ``phi`` is ``2 sqrt(a^2 cos^2 + b^2 sin^2)`` wide in
+    ``beta - phi``; squared, that is ``c0 + c1 cos 2 beta + c2 sin 2 beta`` with
+    ``(c1, c2)`` pointing at ``2 phi`` (widest seen from the front or the back). The three
+    coefficients are fitted by least squares to the silhouette widths of three or more
+    cameras (:func:`silhouette_width_m`; NaN = none); where the views' doubled angles are
+    degenerate (:data:`AXIS_SPREAD_MIN`), ``c0`` is the mean squared width and only
+    ``(c1, c2)`` are fitted. The confidence is the fitted
+    contrast ``|(c1, c2)| / c0`` over ``contrast``, capped at 1: a round body (or widths
+    that disagree) says little. Zeros with fewer than three widths.
+
+    >>> head = np.array([0.0, 0.0, 1.7])
+    >>> cams = np.array([[3.0, 0, 2.5], [0, 3.0, 2.5], [-3.0, 0, 2.5], [0, -3.0, 2.5]])
+    >>> ev = body_axis_cue(head, cams, np.array([0.5, 0.25, 0.5, 0.25]), 0.3)
+    >>> (ev.round(3) + 0.0).tolist()                       # facing +-X: 2 phi = 0
+    [1.0, 0.0]
+    """
+    ok = np.isfinite(widths_m)
+    if ok.sum() < 3 or contrast <= 0:
+        return np.zeros(2)
+    seen = np.asarray(head_m, dtype=np.float64)[:2] - np.asarray(cameras_m)[ok, :2]
+    beta = np.arctan2(seen[:, 1], seen[:, 0])
+    doubled = np.column_stack([np.cos(2 * beta), np.sin(2 * beta)])
+    squared = np.asarray(widths_m, dtype=np.float64)[ok] ** 2
+    spread = doubled - doubled.mean(axis=0)
+    if np.linalg.eigvalsh(spread.T @ spread / len(beta))[0] >= AXIS_SPREAD_MIN:
+        design = np.column_stack([np.ones(len(beta)), doubled])
+        c0, c1, c2 = np.linalg.lstsq(design, squared, rcond=None)[0]
+    else:
+        # the views' doubled angles lie on one line (cameras in the corners of a room and
+        # the person in the middle: two pairs of opposite views); c0 and the swing along
+        # that line cannot be told apart, so c0 is the mean squared width, which opposite
+        # doubled angles leave unbiased
+        c0 = float(squared.mean())
+        c1, c2 = np.linalg.lstsq(doubled, squared - c0, rcond=None)[0]
+    amplitude = float(np.hypot(c1, c2))
+    if c0 <= 0 or amplitude == 0:
+        return np.zeros(2)
+    return min(1.0, amplitude / c0 / contrast) * np.array([c1, c2]) / amplitude
+
+
+def facing_on_axis(facing_xy: np.ndarray, axis_ev: np.ndarray, axis_min: float) -> np.ndarray:
+    """The facing direction (2,) with the body axis's angle and the facing evidence's sign
+    and length.
+
+    The facing evidence (:func:`facing_cues`, :func:`face_cue`) tells front from back but
+    its angle strays tens of degrees; the silhouettes' body axis (:func:`body_axis_cue`,
+    accumulated as ``axis_ev``) is within a few degrees but has no sign. Where the axis
+    evidence reaches ``axis_min`` and the facing evidence is not square to it, the facing
+    is the axis direction on the evidence's side, as long as the evidence; otherwise the
+    evidence itself.
+
+    >>> facing_on_axis(np.array([0.6, 0.8]), np.array([2.0, 0.0]), 1.0).tolist()
+    [1.0, 0.0]
+    >>> (facing_on_axis(np.array([-0.6, 0.8]), np.array([2.0, 0.0]), 1.0) + 0.0).tolist()
+    [-1.0, 0.0]
+    """
+    facing_xy = np.asarray(facing_xy, dtype=np.float64)
+    strength = float(np.linalg.norm(axis_ev))
+    if strength < max(axis_min, 1e-12):
+        return facing_xy
+    half = 0.5 * np.arctan2(axis_ev[1], axis_ev[0])
+    axis = np.array([np.cos(half), np.sin(half)])
+    along = float(facing_xy @ axis)
+    length = float(np.linalg.norm(facing_xy))
+    if abs(along) <= 1e-9 * length:
+        return facing_xy
+    return np.sign(along) * length * axis
 
 
 def owner_rule(

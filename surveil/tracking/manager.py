@@ -56,6 +56,12 @@ HISTORY_FRAMES = 30  # estimates kept per tracker (for the angle rule's "before"
 UNEXPLAINED_LOG_S = 10.0
 
 
+# per-frame decay of the facing evidence of the last few frames (about 5), against which
+# the accumulated evidence (``facing_decay``, about 30 frames) is checked: after a person
+# turns round, the accumulated sum points backwards for a second or more
+RECENT_FACING_DECAY = 0.8
+
+
 def _persisted(since_ns: int | None, t_ns: int, need_s: float) -> tuple[int, bool]:
     """For a condition that holds at ``t_ns``: when it began (``since_ns``, or ``t_ns`` if it
     begins now) and whether it has held for ``need_s`` seconds. The caller stores the first
@@ -169,8 +175,12 @@ class _Person:
     head_id: int | None
     born_ns: int
     facing_ev: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    axis_ev: np.ndarray = field(default_factory=lambda: np.zeros(2))  # doubled angle
+    recent_ev: np.ndarray = field(default_factory=lambda: np.zeros(2))  # the last few frames'
     hand_ids: list[int] = field(default_factory=list)
-    contradicted_ns: int | None = None  # since when the facing says its sides are swapped
+    # how long the facing has said its sides are swapped, net of the time it has not
+    contradicted_s: float = 0.0
+    revised_ns: int | None = None  # when contradicted_s was last updated
 
 
 @dataclass(slots=True)
@@ -1249,8 +1259,11 @@ class MultiTargetTracker:
                 if lcfg.contest_by_owner
                 and self._tracks[h].phase is Phase.NORMAL
                 and lab.owned_elsewhere(self._tracks[h].mean_m, c.mean_m, heads, k, lcfg)
+                and not self._beside_other_hand(p, k, heads, c, h)
             }
             across = self._across_body(p, k, heads, c) if p is not None else set()
+            stacked = self._stacked_above(p, k, heads, c) if p is not None else set()
+            by_owner |= stacked
             held = [
                 self._tracks[h]
                 for h in (p.hand_ids if p is not None else [])
@@ -1269,7 +1282,10 @@ class MultiTargetTracker:
             c.contest_ns, due = _persisted(c.contest_ns, t_ns, lcfg.contest_s)
             if not due:
                 continue
-            h = min(held, key=lambda h: float(np.linalg.norm(h.mean_m - c.mean_m)))
+            h = min(
+                held,
+                key=lambda h: (h.id not in stacked, float(np.linalg.norm(h.mean_m - c.mean_m))),
+            )
             log.debug(
                 "t%d (support %.2f) takes %s from t%d (support %.2f)",
                 c.id,
@@ -1295,8 +1311,52 @@ class MultiTargetTracker:
         if not ids:
             return set()
         hands = np.array([self._tracks[h].mean_m for h in ids])
-        other = lab.across_body(hands, c.mean_m, heads[k], p.facing_ev, lcfg.contest_side_m)
+        other = lab.across_body(
+            hands, c.mean_m, heads[k], self._facing(p, heads[k]), lcfg.contest_side_m
+        )
         return {h for h, o in zip(ids, other, strict=True) if o}
+
+    def _beside_other_hand(
+        self, p: _Person, k: int, heads: np.ndarray, c: _Track, holder: int
+    ) -> bool:
+        """Whether the challenger ``c`` is on the same side of ``p``'s body as ``p``'s hand
+        other than ``holder`` (:func:`lab.same_side`, ``contest_side_m``; False until ``p``'s
+        facing evidence reaches facing_min). A slot taken by ownership is sided afresh
+        (``redecide_sides``), so it is the remaining hand, not the slot's old side, that
+        says where the person's other hand can be."""
+        lcfg = self.cfg.labelling
+        if lcfg.contest_side_m <= 0 or np.linalg.norm(p.facing_ev) < lcfg.facing_min:
+            return False
+        facing = self._facing(p, heads[k])
+        others = [h for h in p.hand_ids if h != holder and h in self._tracks]
+        return any(
+            lab.same_side(self._tracks[h].mean_m, c.mean_m, heads[k], facing, lcfg.contest_side_m)
+            for h in others
+        )
+
+    def _stacked_above(self, p: _Person, k: int, heads: np.ndarray, c: _Track) -> set[int]:
+        """The upper of ``p``'s two normal hands when both are on one side of the body
+        (:func:`lab.same_side`) and the challenger ``c`` is at least ``contest_side_m`` to
+        the other side: a shirt region by the elbow above the hand hanging there holds the
+        slot of the hand on the other side (three_people). Empty until ``p``'s facing
+        evidence reaches facing_min."""
+        lcfg = self.cfg.labelling
+        if lcfg.contest_side_m <= 0 or np.linalg.norm(p.facing_ev) < lcfg.facing_min:
+            return set()
+        hands = [
+            self._tracks[h]
+            for h in p.hand_ids
+            if h in self._tracks and self._tracks[h].phase is Phase.NORMAL
+        ]
+        if len(hands) != 2:
+            return set()
+        a, b = hands
+        side, facing = lcfg.contest_side_m, self._facing(p, heads[k])
+        if not lab.same_side(a.mean_m, b.mean_m, heads[k], facing, side):
+            return set()
+        if not lab.across_body(a.mean_m[None], c.mean_m, heads[k], facing, side)[0]:
+            return set()
+        return {max(hands, key=lambda h: float(h.mean_m[2])).id}
 
     def _redecide_sides(self, p: _Person, k: int, heads: np.ndarray) -> None:
         """Decide ``p``'s left and right hands afresh from its facing direction, when it has
@@ -1363,10 +1423,8 @@ class MultiTargetTracker:
     def _update_facing(self, observations: Mapping[str, CameraObservation]) -> None:
         lcfg = self.cfg.labelling
         persons, heads = self._live_heads()
-        face_views = [
-            (self.rig[name], obs) for name, obs in observations.items() if lcfg.face_weight > 0
-        ]
-        face_cams = np.array([cam.centre_m for cam, _ in face_views]).reshape(-1, 3)
+        views = [(self.rig[name], obs) for name, obs in observations.items()]
+        view_cams = np.array([cam.centre_m for cam, _ in views]).reshape(-1, 3)
         for i, p in enumerate(persons):
             head = self._tracks[p.head_id]
             if head.phase not in ACTIVE:
@@ -1380,23 +1438,47 @@ class MultiTargetTracker:
             ).reshape(-1, 3)
             others = np.delete(heads, i, axis=0)
             ev = lab.facing_cues(head.mean_m, head.vel_mps, hands, others, lcfg)
-            if face_views and head.phase is not Phase.LOST:
+            seen = bool(views) and head.phase is not Phase.LOST
+            if seen and lcfg.face_weight > 0:
                 shares = np.array(
                     [
                         lab.head_skin_share(head.mean_m, obs, cam, lcfg.face_radius_m)
-                        for cam, obs in face_views
+                        for cam, obs in views
                     ]
                 )
-                ev = ev + lab.face_cue(head.mean_m, face_cams, shares, lcfg.face_weight)
+                ev = ev + lab.face_cue(head.mean_m, view_cams, shares, lcfg.face_weight)
             p.facing_ev = lcfg.facing_decay * p.facing_ev + ev
+            p.recent_ev = RECENT_FACING_DECAY * p.recent_ev + ev
+            p.axis_ev *= lcfg.axis_decay
+            if seen and lcfg.axis_weight > 0:
+                drops = np.outer(lab.BODY_AXIS_DROPS_M, (0.0, 0.0, 1.0))
+                widths = np.array(
+                    [
+                        lab.silhouette_width_m(
+                            obs.silhouettes.labels,
+                            cam,
+                            head.mean_m - drops,
+                            lcfg.axis_max_width_m,
+                            others - drops[1],
+                        )
+                        for cam, obs in views
+                    ]
+                )
+                p.axis_ev += lcfg.axis_weight * lab.body_axis_cue(
+                    head.mean_m, view_cams, widths, lcfg.axis_contrast
+                )
 
     def _facing(self, p: _Person, head_m: np.ndarray) -> np.ndarray:
-        if np.linalg.norm(p.facing_ev) > 0:
-            return p.facing_ev
-        # no evidence at all: guess the direction towards the middle of the cameras
-        centre = np.mean([c.centre_m for c in self.rig.cameras], axis=0)
-        d = centre[:2] - head_m[:2]
-        return d if np.linalg.norm(d) > 0 else np.array([1.0, 0.0])
+        """``p``'s facing direction (2,): the evidence, on the body axis once that is known
+        (:func:`lab.facing_on_axis`)."""
+        guess = p.facing_ev
+        if not np.linalg.norm(guess) > 0:
+            # no evidence at all: guess the direction towards the middle of the cameras
+            centre = np.mean([c.centre_m for c in self.rig.cameras], axis=0)
+            guess = centre[:2] - head_m[:2]
+            if not np.linalg.norm(guess) > 0:
+                guess = np.array([1.0, 0.0])
+        return lab.facing_on_axis(guess, p.axis_ev, self.cfg.labelling.axis_min)
 
     def _decide_sides(self, t_ns: int) -> None:
         lcfg = self.cfg.labelling
@@ -1429,41 +1511,60 @@ class MultiTargetTracker:
 
     def _revise_sides(self, t_ns: int) -> None:
         """Swap a person's left and right hands when strong facing evidence has said so for
-        ``lr_revise_s``: a decision taken early on a guess (a lone person standing still) is
-        overturned once the person reaches or claps in front of the body. Both hands must be
-        tracked (normal) and clearly apart sideways, so crossed hands for a moment do not
-        count."""
+        ``lr_revise_s`` (net: a frame that does not say so takes a frame off, so one noisy
+        frame near the margin does not start the count again): a decision taken early on a
+        guess (a lone person standing still) is overturned once the person reaches or claps
+        in front of the body. With both hands tracked (normal), the one labelled left must
+        be clearly right of the other (``lr_revise_margin_m``), so crossed hands for a
+        moment do not count; with one hand tracked and the other lost, the tracked one must
+        be clearly on the other label's side of the head (``lr_revise_lone_m``): the hand
+        on the left labelled right while the left slot's tracker is lost where the hands
+        parted. Frames in which the last few frames' cues point to the other side than the
+        accumulated evidence (a turn) do not count."""
         lcfg = self.cfg.labelling
         if lcfg.lr_revise_evidence <= 0:
             return
         for p in self._persons.values():
-            head = self._head_track(p.number)
-            hands = {
-                self._tracks[h].limb: self._tracks[h]
-                for h in p.hand_ids
-                if h in self._tracks and self._tracks[h].phase is Phase.NORMAL
-            }
-            left, right = hands.get(Limb.LEFT_HAND), hands.get(Limb.RIGHT_HAND)
-            if (
-                head is None
-                or head.phase not in ACTIVE
-                or left is None
-                or right is None
-                or np.linalg.norm(p.facing_ev) < lcfg.lr_revise_evidence
-            ):
-                p.contradicted_ns = None
+            elapsed_s = 0.0 if p.revised_ns is None else (t_ns - p.revised_ns) * 1e-9
+            p.revised_ns = t_ns
+            if self._sides_contradicted(p):
+                p.contradicted_s += elapsed_s
+            else:
+                p.contradicted_s = max(0.0, p.contradicted_s - elapsed_s)
+            if p.contradicted_s < lcfg.lr_revise_s:
                 continue
-            lat = lab.lateral_offsets_m(
-                np.array([left.mean_m, right.mean_m]), head.mean_m, p.facing_ev
+            p.contradicted_s = 0.0
+            hands = [self._tracks[h] for h in p.hand_ids if h in self._tracks]
+            for h in hands:
+                h.limb = Limb.RIGHT_HAND if h.limb is Limb.LEFT_HAND else Limb.LEFT_HAND
+            log.debug(
+                "p%d: left / right swapped (%s)", p.number, ", ".join(f"t{h.id}" for h in hands)
             )
-            if lat[0] - lat[1] > -lcfg.lr_revise_margin_m:
-                p.contradicted_ns = None
-                continue
-            p.contradicted_ns, due = _persisted(p.contradicted_ns, t_ns, lcfg.lr_revise_s)
-            if due:
-                left.limb, right.limb = Limb.RIGHT_HAND, Limb.LEFT_HAND
-                p.contradicted_ns = None
-                log.debug("p%d: left / right swapped (t%d, t%d)", p.number, left.id, right.id)
+
+    def _sides_contradicted(self, p: _Person) -> bool:
+        """Whether ``p``'s facing says now that its hands' sides are swapped (the cases of
+        :meth:`_revise_sides`)."""
+        lcfg = self.cfg.labelling
+        head = self._head_track(p.number)
+        hands = [self._tracks[h] for h in p.hand_ids if h in self._tracks]
+        normal = [h for h in hands if h.phase is Phase.NORMAL]
+        if (
+            head is None
+            or head.phase not in ACTIVE
+            or not normal
+            or any(h.phase not in (Phase.NORMAL, Phase.LOST) for h in hands)
+            or any(h.limb is Limb.UNKNOWN for h in hands)
+            or np.linalg.norm(p.facing_ev) < lcfg.lr_revise_evidence
+        ):
+            return False
+        facing = self._facing(p, head.mean_m)
+        if p.recent_ev @ facing < 0:
+            return False  # turning: the last frames' cues already point the other way
+        lat = lab.lateral_offsets_m(np.array([h.mean_m for h in normal]), head.mean_m, facing)
+        side = np.array([1.0 if h.limb is Limb.LEFT_HAND else -1.0 for h in normal])
+        if len(normal) == 2:  # the one labelled left is clearly right of the other
+            return bool(side @ lat <= -lcfg.lr_revise_margin_m)
+        return bool(lcfg.lr_revise_lone_m > 0 and side[0] * lat[0] <= -lcfg.lr_revise_lone_m)
 
     # ------------------------------------------------------------------ 5: state machine
 
@@ -1774,6 +1875,10 @@ class MultiTargetTracker:
         return len(self._tracks)
 
     def person_facing(self, person: int) -> np.ndarray | None:
-        """(2,) accumulated facing evidence of person ``person`` (None if unknown)."""
+        """(2,) facing of person ``person`` (None if unknown): the accumulated facing
+        evidence, turned onto the body axis once that is known; its length is the
+        evidence's."""
         p = self._persons.get(person)
-        return None if p is None else p.facing_ev.copy()
+        if p is None or not np.linalg.norm(p.facing_ev) > 0:
+            return None if p is None else p.facing_ev.copy()
+        return lab.facing_on_axis(p.facing_ev, p.axis_ev, self.cfg.labelling.axis_min)

@@ -443,8 +443,14 @@ class LabellingConfig:
         min=0.0,
     )
     lr_revise_margin_m: float = setting(
-        0.1,
+        0.05,
         "the labelled left hand must be this far right of the right hand to count against, m",
+        min=0.0,
+    )
+    lr_revise_lone_m: float = setting(
+        0.15,
+        "with one of a person's hands tracked, it must be this far on the other label's "
+        "side of the head to count against (0 = only with both hands tracked), m",
         min=0.0,
     )
     lr_revise_s: float = setting(
@@ -473,6 +479,31 @@ class LabellingConfig:
         0.1,
         "the skin share is taken over the square of this half-side around the head, m",
         min=0.01,
+    )
+    axis_weight: float = setting(
+        1.0,
+        "evidence per frame on the body's front-back axis from how wide the silhouette is "
+        "across the shoulders in three or more views; the facing takes the axis's angle and "
+        "the facing evidence's sign (0 = off)",
+        min=0.0,
+    )
+    axis_contrast: float = setting(
+        0.3,
+        "a fitted width contrast (squared widths' swing over their mean) this large gives "
+        "the full axis_weight, a smaller one proportionally less",
+        min=0.01,
+    )
+    axis_decay: float = setting(
+        0.8, "per-frame decay of the accumulated body-axis evidence", min=0.0, max=1.0
+    )
+    axis_min: float = setting(
+        1.0, "body-axis evidence needed before the facing takes the axis's angle", min=0.0
+    )
+    axis_max_width_m: float = setting(
+        0.8,
+        "a silhouette wider than this across the shoulders is two people merged and says "
+        "nothing on the axis, m",
+        min=0.1,
     )
 
 

@@ -361,6 +361,22 @@ def test_a_hand_lost_on_its_return_goes_on_under_its_label(rules, heir):
         assert abs(events[0].climax_ns - 1.1 * S) <= 0.1 * S
 
 
+def test_giving_hand_that_stops_before_the_taker_arrives_is_not_a_place(rules):
+    """The giver's hand reaches out and stops 0.5 s before the taker's hand meets it there
+    (three_people, seed 0: the ball held out, the taker's hand still on its way). The stop
+    opens a pick/place episode; the meeting with another person's hand, before the hand
+    leaves its still point, closes it: a handover, only the exchange."""
+    gives = switch(1.2, holding(GREEN), empty())
+    takes = switch(1.2, empty(), holding(GREEN))
+    script = two_people(gives, takes)
+    script.tracks[2].path = keyframes(
+        (0.1, P1_RIGHT_REST), (0.5, (0.57, 0, 1.05)), (1.5, (0.57, 0, 1.05)), (2.0, P1_RIGHT_REST)
+    )
+    events = run(rules, script.stream())
+    assert [e.activity for e in events] == ["exchange"]
+    assert (events[0].from_actor, events[0].to_actor) == ("p1/right_hand", "p2/right_hand")
+
+
 def test_receiving_hand_that_stops_after_an_exchange_is_not_a_pick(rules):
     """The receiver's hand parts from the giver's, moves on a little and stops away from the
     body. Its reach is the pair's, seen through the combined state, and its carry estimate

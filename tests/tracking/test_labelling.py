@@ -210,3 +210,86 @@ def test_face_cue_points_where_the_face_is_seen(rig, facing_deg):
     # two cameras facing each other across the person: along the line between them
     two = lab.face_cue(np.zeros(3), np.array([[3.0, 0, 2], [-3.0, 0, 2]]), np.array([0.6, 0.1]), 1)
     assert two.tolist() == pytest.approx([0.25, 0.0])
+
+
+DROPS = np.outer(lab.BODY_AXIS_DROPS_M, (0.0, 0.0, 1.0))
+
+
+def _axis_error_deg(ev: np.ndarray, facing_deg: float) -> float:
+    """Angle between the axis of doubled-angle evidence ``ev`` and a facing, 0-90."""
+    phi = np.degrees(0.5 * np.arctan2(ev[1], ev[0]))
+    return abs((phi - facing_deg + 90.0) % 180.0 - 90.0)
+
+
+def _widths(rig, obs, head, others=None):
+    return np.array(
+        [
+            lab.silhouette_width_m(
+                obs[c.name].silhouettes.labels, c, head - DROPS, 0.8, others_m=others
+            )
+            for c in rig.cameras
+        ]
+    )
+
+
+@pytest.mark.parametrize("facing_deg", [0.0, 35.0, 100.0, -60.0])
+def test_body_axis_from_silhouette_widths(rig, draw_bodies, facing_deg):
+    cams = np.array([c.centre_m for c in rig.cameras])
+    for centre in ((3.6, 1.3), (1.2, 2.8), (3.0, 2.2)):  # off the middle of the rig
+        head = np.array([*centre, 1.65])
+        widths = _widths(rig, draw_bodies((centre, facing_deg, 0.25, 0.12)), head)
+        # every camera measures a body between its depth and its width across
+        assert np.all((widths > 2 * 0.12 * 0.9) & (widths < 2 * 0.25 * 1.2))
+        ev = lab.body_axis_cue(head, cams, widths, 0.3)
+        assert np.linalg.norm(ev) == pytest.approx(1.0)  # a clear contrast: full weight
+        assert _axis_error_deg(ev, facing_deg) < 10.0
+        # a round body says less (its widths differ by a few pixels at 320 x 240: rounding,
+        # and rows cut a body that the perspective tilts obliquely), too few views nothing
+        round_widths = _widths(rig, draw_bodies((centre, facing_deg, 0.2, 0.2)), head)
+        assert np.linalg.norm(lab.body_axis_cue(head, cams, round_widths, 0.3)) < 0.5
+        two = np.where(np.arange(4) < 2, widths, np.nan)
+        assert np.allclose(lab.body_axis_cue(head, cams, two, 0.3), 0.0)
+
+
+def test_body_axis_between_four_corner_cameras_is_sided_but_coarse(rig, draw_bodies):
+    # in the middle of the rig the cameras are two pairs of opposite views: their doubled
+    # angles lie on one line, and only which diagonal the front is nearer is known
+    cams = np.array([c.centre_m for c in rig.cameras])
+    head = np.array([2.5, 2.0, 1.65])
+    for facing_deg in (35.0, -60.0, 100.0):
+        ev = lab.body_axis_cue(
+            head, cams, _widths(rig, draw_bodies(((2.5, 2.0), facing_deg, 0.25, 0.12)), head), 0.3
+        )
+        assert _axis_error_deg(ev, facing_deg) < 40.0
+    # facing a wall square on: every view sees the same width, so there is no evidence
+    flat = _widths(rig, draw_bodies(((2.5, 2.0), 0.0, 0.25, 0.12)), head)
+    assert np.linalg.norm(lab.body_axis_cue(head, cams, flat, 0.3)) < 0.05
+
+
+def test_silhouette_width_of_a_person_merged_with_another(rig, draw_bodies):
+    # two people side by side 0.45 m apart: their silhouettes merge in the cameras that see
+    # them one beside the other; the free side of the run, doubled, still measures the body
+    a, b = (2.8, 1.6), (2.8, 2.05)
+    head_a = np.array([*a, 1.65])
+    alone = _widths(rig, draw_bodies((a, 0.0, 0.22, 0.12)), head_a)
+    both = draw_bodies((a, 0.0, 0.22, 0.12), (b, 0.0, 0.22, 0.12))
+    merged = _widths(rig, both, head_a)
+    fair = _widths(rig, both, head_a, others=np.array([[*b, 1.35]]))
+    assert np.nanmax(merged / alone) > 1.5  # without knowing of b, some run holds both
+    ok = np.isfinite(fair)
+    assert ok.sum() >= 3
+    assert np.allclose(fair[ok], alone[ok], rtol=0.15)
+
+
+def test_facing_takes_the_axis_angle_and_the_evidence_sign():
+    axis_ev = 1.5 * np.array([np.cos(np.radians(60)), np.sin(np.radians(60))])  # phi = 30
+    for evidence_deg, expected_deg in ((70.0, 30.0), (-10.0, 30.0), (150.0, 210.0)):
+        ev = 0.8 * np.array([np.cos(np.radians(evidence_deg)), np.sin(np.radians(evidence_deg))])
+        out = lab.facing_on_axis(ev, axis_ev, 1.0)
+        assert np.linalg.norm(out) == pytest.approx(0.8)  # the evidence's strength stays
+        got = np.degrees(np.arctan2(out[1], out[0])) % 360
+        assert got == pytest.approx(expected_deg % 360)
+    ev = np.array([0.3, 0.5])
+    assert lab.facing_on_axis(ev, 0.5 * axis_ev, 1.0).tolist() == ev.tolist()  # weak axis
+    square = np.array([-np.sin(np.radians(30)), np.cos(np.radians(30))])  # along no side
+    assert lab.facing_on_axis(square, axis_ev, 1.0) == pytest.approx(square)

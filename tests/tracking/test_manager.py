@@ -227,6 +227,73 @@ def test_a_still_person_seen_face_on_is_sided_by_the_face(rig, rng):
     assert by_label(guessed[-1])["p1/left_hand"][1] < a["head"][1]
 
 
+@pytest.mark.parametrize("facing_deg", [120.0, 40.0, -70.0])
+def test_a_reaching_person_is_faced_along_the_silhouettes_body_axis(
+    rig, draw_bodies, rng, facing_deg
+):
+    # a lone person standing still reaches forward with the right hand: the hands' forward
+    # excursion says where the front is, but along the normal of the hand-to-hand line,
+    # tens of degrees off; the silhouettes' widths across the shoulders give the angle
+    a = body((3.3, 1.5), facing_deg)
+    reach = a["head"] + 0.45 * a["fwd"] - 0.05 * a["left"] - [0, 0, 0.6]
+    frames = [[a["head"], a["left_hand"], reach]] * 45
+    obs = draw_bodies(((3.3, 1.5), facing_deg, 0.25, 0.12))
+    truth = complex(*a["fwd"][:2])
+    errors = []
+    for axis_weight in (1.0, 0.0):
+        cfg = TrackingConfig(
+            lifecycle=LONE.lifecycle, labelling=LabellingConfig(axis_weight=axis_weight)
+        )
+        trk = MultiTargetTracker(cfg, rig, seed=2)
+        out = [trk.step(i * DT_NS, candidates(pts, rng), obs) for i, pts in enumerate(frames)]
+        errors.append(abs(np.degrees(np.angle(complex(*trk.person_facing(1)) / truth))))
+        sided = by_label(out[-1])
+        assert np.linalg.norm(sided["p1/right_hand"] - reach) < 0.05
+    assert errors[0] < 5.0 < 30.0 < errors[1]
+
+
+@pytest.mark.parametrize("lone_m", [0.15, 0.0])
+def test_a_lone_tracked_hand_on_the_wrong_side_is_swapped(rig, rng, lone_m):
+    # sides guessed wrong (a still person facing away from the middle of the rig); then the
+    # face is seen, and the left hand's candidates stop (its tracker is lost): the right
+    # hand, labelled left, is 25 cm to the right of the head, and with lr_revise_lone_m the
+    # two slots swap (the lost one too); with 0 the guess stands, as the pair rule needs two
+    # tracked hands
+    a = body((3.5, 2.0), 0.0)
+    cfg = TrackingConfig(
+        lifecycle=LONE.lifecycle, labelling=LabellingConfig(lr_revise_lone_m=lone_m)
+    )
+    trk = MultiTargetTracker(cfg, rig, seed=2)
+    obs = face_views(rig, a["head"], a["fwd"])
+    both, one = [a["head"], a["left_hand"], a["right_hand"]], [a["head"], a["right_hand"]]
+    out = [trk.step(i * DT_NS, candidates(both, rng)) for i in range(40)]
+    out += [trk.step(i * DT_NS, candidates(one, rng), obs) for i in range(40, 100)]
+    assert np.linalg.norm(by_label(out[39])["p1/left_hand"] - a["right_hand"]) < 0.05
+    final = {s.label: s for s in out[-1].targets}
+    right = min(final.values(), key=lambda s: np.linalg.norm(s.mean_m - a["right_hand"]))
+    assert right.label == ("p1/right_hand" if lone_m > 0 else "p1/left_hand")
+    assert right.phase is Phase.NORMAL
+
+
+def test_a_person_who_turns_round_keeps_the_sides_of_their_hands(rig, rng):
+    # a still person faces +x, seen face on, for 80 frame sets, then turns round in 0.4 s
+    # and stands facing -x: the hands turn with the body, so their labels stay right. The
+    # accumulated facing evidence points backwards for more than lr_revise_s after the turn;
+    # the last frames' cues already point the new way, so no swap is counted meanwhile
+    centre = (3.5, 2.0)
+    cfg = TrackingConfig(lifecycle=LONE.lifecycle, labelling=LabellingConfig(axis_weight=0.0))
+    trk = MultiTargetTracker(cfg, rig, seed=3)
+    out = []
+    for i in range(160):
+        a = body(centre, 180.0 * min(max(i - 80, 0) / 6, 1.0))
+        pts = [a["head"], a["left_hand"], a["right_hand"]]
+        out.append(trk.step(i * DT_NS, candidates(pts, rng), face_views(rig, a["head"], a["fwd"])))
+        if i in (79, 100, 120, 159):
+            sided = by_label(out[-1])
+            assert np.linalg.norm(sided["p1/left_hand"] - a["left_hand"]) < 0.05, i
+            assert np.linalg.norm(sided["p1/right_hand"] - a["right_hand"]) < 0.05, i
+
+
 def clap_frames(cross: bool):
     """One person facing the middle of the rig; from frame 35 (after left / right were
     decided) the hands move to a point 35 cm in front of the chest,
@@ -1067,6 +1134,34 @@ def test_a_strong_point_at_the_right_elbow_does_not_take_the_left_hands_slot(rig
         assert not _owner_of(out[-1], shirt).startswith("p1/")
     else:
         assert _owner_of(out[-1], shirt) == "p1/left_hand"
+
+
+@pytest.mark.parametrize("side_m", [0.1, 0.0])
+def test_a_shirt_point_stacked_above_the_right_hand_gives_its_slot_to_the_left_hand(rig, side_m):
+    """a's left hand is hidden for 40 frame sets while a strong point 23 cm above the right
+    hand (the colour fringe where a hanging sleeve meets the wall, three_people) becomes
+    a's second hand. Then the left hand shows, held out in front, as strong: the support
+    contest cannot tell it from the shirt point. Both of a's hands are on its right (b
+    faces a, so a's facing is known) and the newcomer is on its left: the upper of the two
+    gives its slot up, and a's hands are sided afresh. With contest_side_m 0 the left hand
+    stays unlabelled."""
+    rng = np.random.default_rng(8)
+    a, b = body((2.0, 2.0), 0.0), body((3.2, 2.0), 180.0)
+    shirt = a["right_hand"] + [0, 0, 0.23]
+    held = a["head"] + 0.2 * a["left"] + 0.3 * a["fwd"] - [0, 0, 0.6]
+    seen = [a["head"], a["right_hand"], shirt, b["head"], b["left_hand"], b["right_hand"]]
+    sets = [_noisy_set(rng, seen, [0.95] * 6) for _ in range(40)]
+    sets += [_noisy_set(rng, [*seen, held], [0.95] * 7) for _ in range(40)]
+    cfg = TrackingConfig(labelling=LabellingConfig(contest_side_m=side_m))
+    trk = MultiTargetTracker(cfg, rig, seed=17)
+    out = [trk.step(i * DT_NS, c) for i, c in enumerate(sets)]
+    assert _owner_of(out[39], shirt).startswith("p1/")
+    if side_m > 0:
+        assert _owner_of(out[-1], held) == "p1/left_hand"
+        assert _owner_of(out[-1], a["right_hand"]) == "p1/right_hand"
+        assert not _owner_of(out[-1], shirt).startswith("p1/")
+    else:
+        assert not _owner_of(out[-1], held).startswith("p1/")
 
 
 @pytest.mark.parametrize("side_m", [0.1, 0.0])
