@@ -532,9 +532,9 @@ def body_axis_cue(
     coefficients are fitted by least squares to the silhouette widths of three or more
     cameras (:func:`silhouette_width_m`; NaN = none); where the views' doubled angles are
     degenerate (:data:`AXIS_SPREAD_MIN`), ``c0`` is the mean squared width and only
-    ``(c1, c2)`` are fitted. The confidence is the fitted
-    contrast ``|(c1, c2)| / c0`` over ``contrast``, capped at 1: a round body (or widths
-    that disagree) says little. Zeros with fewer than three widths.
+    ``(c1, c2)`` are fitted. The confidence is the fitted contrast ``|(c1, c2)| / c0`` over
+    ``contrast``, capped at 1: a round body (or widths that disagree) says little. Zeros
+    with fewer than three widths.
 
     >>> head = np.array([0.0, 0.0, 1.7])
     >>> cams = np.array([[3.0, 0, 2.5], [0, 3.0, 2.5], [-3.0, 0, 2.5], [0, -3.0, 2.5]])

@@ -1305,7 +1305,7 @@ class MultiTargetTracker:
         """Ids of ``p``'s hands on the other side of the body from the challenger ``c``
         (:func:`lab.across_body`); none until ``p``'s facing evidence reaches facing_min."""
         lcfg = self.cfg.labelling
-        if lcfg.contest_side_m <= 0 or np.linalg.norm(p.facing_ev) < lcfg.facing_min:
+        if not self._sides_testable(p):
             return set()
         ids = [h for h in p.hand_ids if h in self._tracks]
         if not ids:
@@ -1316,6 +1316,12 @@ class MultiTargetTracker:
         )
         return {h for h, o in zip(ids, other, strict=True) if o}
 
+    def _sides_testable(self, p: _Person) -> bool:
+        """Whether the contest's side tests apply to ``p``: ``contest_side_m`` is on and
+        ``p``'s facing evidence has reached facing_min."""
+        lcfg = self.cfg.labelling
+        return bool(lcfg.contest_side_m > 0 and np.linalg.norm(p.facing_ev) >= lcfg.facing_min)
+
     def _beside_other_hand(
         self, p: _Person, k: int, heads: np.ndarray, c: _Track, holder: int
     ) -> bool:
@@ -1325,7 +1331,7 @@ class MultiTargetTracker:
         (``redecide_sides``), so it is the remaining hand, not the slot's old side, that
         says where the person's other hand can be."""
         lcfg = self.cfg.labelling
-        if lcfg.contest_side_m <= 0 or np.linalg.norm(p.facing_ev) < lcfg.facing_min:
+        if not self._sides_testable(p):
             return False
         facing = self._facing(p, heads[k])
         others = [h for h in p.hand_ids if h != holder and h in self._tracks]
@@ -1341,7 +1347,7 @@ class MultiTargetTracker:
         slot of the hand on the other side (three_people). Empty until ``p``'s facing
         evidence reaches facing_min."""
         lcfg = self.cfg.labelling
-        if lcfg.contest_side_m <= 0 or np.linalg.norm(p.facing_ev) < lcfg.facing_min:
+        if not self._sides_testable(p):
             return set()
         hands = [
             self._tracks[h]
@@ -1879,6 +1885,6 @@ class MultiTargetTracker:
         evidence, turned onto the body axis once that is known; its length is the
         evidence's."""
         p = self._persons.get(person)
-        if p is None or not np.linalg.norm(p.facing_ev) > 0:
-            return None if p is None else p.facing_ev.copy()
-        return lab.facing_on_axis(p.facing_ev, p.axis_ev, self.cfg.labelling.axis_min)
+        if p is None:
+            return None
+        return np.array(lab.facing_on_axis(p.facing_ev, p.axis_ev, self.cfg.labelling.axis_min))
