@@ -776,7 +776,7 @@ class ActivityEngine:
                 and any(
                     o.phase is Phase.COMBINED
                     and o.person not in (0, snap.person)
-                    and o.limb in (Limb.LEFT_HAND, Limb.RIGHT_HAND)
+                    and o.limb.is_hand
                     and float(np.linalg.norm(o.mean_m - snap.mean_m)) < th.separation_m
                     for o in cur.targets.values()
                 )

@@ -62,6 +62,10 @@ UNEXPLAINED_LOG_S = 10.0
 RECENT_FACING_DECAY = 0.8
 
 
+# (3, 3) offsets from a head down to the rows whose silhouette widths tell the body axis
+_AXIS_DROPS_M = np.outer(lab.BODY_AXIS_DROPS_M, (0.0, 0.0, 1.0))
+
+
 def _persisted(since_ns: int | None, t_ns: int, need_s: float) -> tuple[int, bool]:
     """For a condition that holds at ``t_ns``: when it began (``since_ns``, or ``t_ns`` if it
     begins now) and whether it has held for ``need_s`` seconds. The caller stores the first
@@ -1457,15 +1461,14 @@ class MultiTargetTracker:
             p.recent_ev = RECENT_FACING_DECAY * p.recent_ev + ev
             p.axis_ev *= lcfg.axis_decay
             if seen and lcfg.axis_weight > 0:
-                drops = np.outer(lab.BODY_AXIS_DROPS_M, (0.0, 0.0, 1.0))
                 widths = np.array(
                     [
                         lab.silhouette_width_m(
                             obs.silhouettes.labels,
                             cam,
-                            head.mean_m - drops,
+                            head.mean_m - _AXIS_DROPS_M,
                             lcfg.axis_max_width_m,
-                            others - drops[1],
+                            others - _AXIS_DROPS_M[1],
                         )
                         for cam, obs in views
                     ]
