@@ -592,7 +592,7 @@ class ActivityEngine:
         before, after = ep.before, self._after(ep, cur)
         if th.conserve_objects and all(limb.endswith("hand") for limb in rule.limbs):
             before, after, inferred = conserve_objects(
-                before, after, th.min_confidence, th.hue_tolerance_deg
+                before, after, th.min_confidence, th.hue_tolerance_deg, th.conserve_doubt_below
             )
             if inferred is not None:
                 log.debug(

@@ -46,6 +46,7 @@ def conserve_objects(
     after: tuple[CarryEstimate | None, CarryEstimate | None],
     min_confidence: float,
     hue_tolerance_deg: float,
+    doubt_below: float = 0.0,
 ) -> tuple[tuple[CarryEstimate | None, ...], tuple[CarryEstimate | None, ...], int | None]:
     """Two meeting hands' carry estimates with one unknown state filled from the other three.
 
@@ -56,6 +57,10 @@ def conserve_objects(
     estimate's confidence is the least of the three it came from. Nothing is inferred when
     zero or several states are unknown, when the count leaves no 0-or-1 answer, or when an
     inferred carrying state has no single hue to take.
+
+    When all four states are known but break the count (an object appeared or vanished),
+    one of them is wrong; the least confident one is taken as unknown and inferred from the
+    others if its confidence is below ``doubt_below`` (0: never).
 
     Returns ``(before, after, which)``: ``which`` is the index 0-3 (before a, before b,
     after a, after b) of the inferred state, or None.
@@ -69,6 +74,10 @@ def conserve_objects(
     """
     four = [*before, *after]
     unknown = [j for j, e in enumerate(four) if carry_state(e, min_confidence) is None]
+    if not unknown and _count(before) != _count(after):
+        weakest = min(range(4), key=lambda j: four[j].confidence)  # type: ignore[union-attr]
+        if four[weakest].confidence < doubt_below:  # type: ignore[union-attr]
+            unknown = [weakest]
     if len(unknown) != 1:
         return before, after, None
     k = unknown[0]
@@ -102,6 +111,11 @@ def conserve_objects(
         min(e.confidence for j, e in enumerate(four) if j != k),
     )
     return (four[0], four[1]), (four[2], four[3]), k
+
+
+def _count(pair: tuple[CarryEstimate | None, ...]) -> int:
+    """How many objects a pair of known carry estimates holds."""
+    return sum(bool(e.carrying) for e in pair)  # type: ignore[union-attr]
 
 
 def object_moved(

@@ -175,6 +175,14 @@ class Thresholds:
         "two hands that meet and part hold as many objects after as before: when one of "
         "their four carry states is unknown, the other three decide it",
     )
+    conserve_doubt_below: float = setting(
+        0.75,
+        "with conserve_objects: when the four carry states are known but break the count "
+        "(an object appeared or vanished), the least confident one is decided by the other "
+        "three if its confidence is below this; 0 = never",
+        min=0.0,
+        max=1.0,
+    )
 
 
 _THRESHOLD_KEYS = tuple(f.name for f in dataclasses.fields(Thresholds))

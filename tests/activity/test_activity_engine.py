@@ -185,6 +185,28 @@ def test_giver_whose_estimate_fades_just_before_contact_still_gives(tmp_path, ru
     assert [e.activity for e in without] == (["exchange"] if faded_s < 2.0 else [])
 
 
+@pytest.mark.parametrize(("taker_conf", "recognised"), [(0.4, True), (0.85, False)])
+def test_a_weak_empty_taker_cannot_make_the_object_vanish(tmp_path, rules, taker_conf, recognised):
+    """three_people's handover: the giver surely held the ball and is surely empty after,
+    the taker reads empty after, weakly (the ball is hidden in the hand). A ball does not
+    vanish between two hands, so a reading below ``conserve_doubt_below`` (0.75) gives way
+    and the exchange stands; a confident one stands and nothing fires."""
+    gives = switch(1.2, holding(GREEN, conf=1.0), empty(conf=0.97))
+    takes = switch(1.2, empty(conf=0.95), empty(conf=taker_conf))
+    events = run(rules, two_people(gives, takes).stream())
+    if recognised:
+        assert [e.activity for e in events] == ["exchange"]
+        assert (events[0].from_actor, events[0].to_actor) == ("p1/right_hand", "p2/right_hand")
+        assert events[0].object_hue_deg == pytest.approx(GREEN)
+    else:
+        assert [e.activity for e in events] == []
+    text = Path(rules.sources[0]).read_text()
+    never = tmp_path / "default.toml"
+    never.write_text(text.replace("conserve_doubt_below = 0.75", "conserve_doubt_below = 0.0"))
+    assert never.read_text() != text
+    assert run(load_rules([never]), two_people(gives, takes).stream()) == []
+
+
 def test_self_exchange_between_own_hands(rules):
     events = run(
         rules,

@@ -60,3 +60,42 @@ def test_nothing_is_inferred_without_a_unique_answer(before, after):
     bef, aft, k = infer(before, after)
     assert k is None
     assert (bef, aft) == (before, after)
+
+
+def doubt(before, after, doubt_below):
+    return conserve_objects(before, after, 0.3, 25.0, doubt_below=doubt_below)
+
+
+def test_a_weak_state_that_breaks_the_count_is_decided_by_the_other_three():
+    """three_people's missed exchanges: the giver confidently held the ball and is
+    confidently empty after, the taker reads empty after with little confidence; the ball
+    cannot vanish, so the taker's weak reading is the wrong one."""
+    before = (est(True, 50.0, conf=1.0), est(False, conf=0.95))
+    after = (est(False, conf=0.97), est(False, conf=0.4))
+    bef, aft, k = doubt(before, after, doubt_below=0.75)
+    assert k == 3
+    assert aft[1].carrying is True and aft[1].hue_deg == 50.0
+    assert aft[1].confidence == pytest.approx(0.95)  # the least of the other three
+    assert bef == before and aft[0] == after[0]
+
+
+@pytest.mark.parametrize("doubt_below", [0.0, 0.4])
+def test_a_state_at_or_above_the_doubt_level_stands(doubt_below):
+    before = (est(True, 50.0, conf=1.0), est(False, conf=0.95))
+    after = (est(False, conf=0.97), est(False, conf=0.4))
+    assert doubt(before, after, doubt_below) == (before, after, None)
+
+
+def test_only_the_least_confident_state_is_doubted():
+    """Here the weakest is the giver's 'carrying' before (a false carry): flipping it to
+    empty makes the count agree (a clap or handshake), and the taker's state stands."""
+    before = (est(True, 56.0, conf=0.5), est(False, conf=0.85))
+    after = (est(False, conf=0.95), est(False, conf=0.6))
+    bef, aft, k = doubt(before, after, doubt_below=0.75)
+    assert k == 0 and bef[0].carrying is False and aft == after
+
+
+def test_a_count_that_holds_is_not_doubted():
+    before = (est(True, 50.0, conf=0.35), est(False, conf=0.35))
+    after = (est(False, conf=0.35), est(True, 52.0, conf=0.35))
+    assert doubt(before, after, doubt_below=1.0) == (before, after, None)
