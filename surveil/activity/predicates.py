@@ -3,6 +3,8 @@ stillness and reach (paper 004 §7.1, §7.3.1, Table 1). No state, no I/O."""
 
 from __future__ import annotations
 
+from typing import cast
+
 import numpy as np
 
 from surveil.datatypes import CarryEstimate
@@ -58,9 +60,11 @@ def conserve_objects(
     zero or several states are unknown, when the count leaves no 0-or-1 answer, or when an
     inferred carrying state has no single hue to take.
 
-    When all four states are known but break the count (an object appeared or vanished),
-    one of them is wrong; the least confident one is taken as unknown and inferred from the
-    others if its confidence is below ``doubt_below`` (0: never).
+    When all four states are known but break the count by one (an object appeared or
+    vanished), one of them is wrong: of those whose change would restore the count (a hand
+    that carried before or is empty after, for an object that vanished), the least confident
+    is taken as unknown and inferred from the others if its confidence is below
+    ``doubt_below`` (0: never).
 
     Returns ``(before, after, which)``: ``which`` is the index 0-3 (before a, before b,
     after a, after b) of the inferred state, or None.
@@ -74,9 +78,14 @@ def conserve_objects(
     """
     four = [*before, *after]
     unknown = [j for j, e in enumerate(four) if carry_state(e, min_confidence) is None]
-    if not unknown and _count(before) != _count(after):
-        weakest = min(range(4), key=lambda j: four[j].confidence)  # type: ignore[union-attr]
-        if four[weakest].confidence < doubt_below:  # type: ignore[union-attr]
+    surplus = 0 if unknown else _count(before) - _count(after)
+    if abs(surplus) == 1:
+        known = cast("list[CarryEstimate]", four)
+        # an object vanished: a carrying state before or an empty one after is wrong; one
+        # appeared: an empty one before or a carrying one after
+        suspects = [j for j, e in enumerate(known) if e.carrying == ((j < 2) == (surplus > 0))]
+        weakest = min(suspects, key=lambda j: known[j].confidence)
+        if known[weakest].confidence < doubt_below:
             unknown = [weakest]
     if len(unknown) != 1:
         return before, after, None
@@ -114,8 +123,8 @@ def conserve_objects(
 
 
 def _count(pair: tuple[CarryEstimate | None, ...]) -> int:
-    """How many objects a pair of known carry estimates holds."""
-    return sum(bool(e.carrying) for e in pair)  # type: ignore[union-attr]
+    """How many objects a pair of known (not None) carry estimates holds."""
+    return sum(bool(e is not None and e.carrying) for e in pair)
 
 
 def object_moved(

@@ -178,8 +178,9 @@ class Thresholds:
     conserve_doubt_below: float = setting(
         0.75,
         "with conserve_objects: when the four carry states are known but break the count "
-        "(an object appeared or vanished), the least confident one is decided by the other "
-        "three if its confidence is below this; 0 = never",
+        "(an object appeared or vanished), the least confident state whose change would "
+        "restore the count is decided by the other three if its confidence is below this; "
+        "0 = never",
         min=0.0,
         max=1.0,
     )

@@ -95,6 +95,15 @@ def test_only_the_least_confident_state_is_doubted():
     assert k == 0 and bef[0].carrying is False and aft == after
 
 
+def test_the_doubted_state_is_one_whose_change_restores_the_count():
+    """three_people, seed 1: the taker's "empty" before (0.49) is the weakest, but the ball
+    it did not hold before cannot explain a vanished ball; its "empty" after (0.72) can."""
+    before = (est(True, 51.0, conf=1.0), est(False, conf=0.49))
+    after = (est(False, conf=0.98), est(False, conf=0.72))
+    bef, aft, k = doubt(before, after, doubt_below=0.75)
+    assert k == 3 and aft[1].carrying is True and aft[1].hue_deg == 51.0
+
+
 def test_a_count_that_holds_is_not_doubted():
     before = (est(True, 50.0, conf=0.35), est(False, conf=0.35))
     after = (est(False, conf=0.35), est(True, 52.0, conf=0.35))
