@@ -3,6 +3,7 @@ stillness and reach (paper 004 §7.1, §7.3.1, Table 1). No state, no I/O."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import cast
 
 import numpy as np
@@ -94,7 +95,7 @@ def conserve_objects(
     # every estimate but the k-th is known (present and confident)
     beside = four[k ^ 1]  # the other hand at the same decision point
     there = four[other : other + 2]
-    carrying = sum(e.carrying for e in there) - beside.carrying
+    carrying = _count(there) - beside.carrying
     if carrying not in (0, 1):
         return before, after, None
     hue = None
@@ -122,8 +123,8 @@ def conserve_objects(
     return (four[0], four[1]), (four[2], four[3]), k
 
 
-def _count(pair: tuple[CarryEstimate | None, ...]) -> int:
-    """How many objects a pair of known (not None) carry estimates holds."""
+def _count(pair: Sequence[CarryEstimate | None]) -> int:
+    """How many objects two hands' known (not None) carry estimates hold."""
     return sum(bool(e is not None and e.carrying) for e in pair)
 
 

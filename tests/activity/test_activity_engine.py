@@ -200,11 +200,10 @@ def test_a_weak_empty_taker_cannot_make_the_object_vanish(tmp_path, rules, taker
         assert events[0].object_hue_deg == pytest.approx(GREEN)
     else:
         assert [e.activity for e in events] == []
-    text = Path(rules.sources[0]).read_text()
-    never = tmp_path / "default.toml"
-    never.write_text(text.replace("conserve_doubt_below = 0.75", "conserve_doubt_below = 0.0"))
-    assert never.read_text() != text
-    assert run(load_rules([never]), two_people(gives, takes).stream()) == []
+    never = edited_defaults(
+        tmp_path, rules, "conserve_doubt_below = 0.75", "conserve_doubt_below = 0.0"
+    )
+    assert run(never, two_people(gives, takes).stream()) == []
 
 
 def test_self_exchange_between_own_hands(rules):
@@ -504,13 +503,18 @@ def test_decision_waits_for_confident_carry_after_the_separation(rules):
     assert events[0].confidence > 0.5  # decided on evidence, not by the timeout
 
 
+def edited_defaults(tmp_path: Path, rules, old: str, new: str):
+    """The default rules with ``old`` replaced by ``new`` in the file (which must hold it)."""
+    text = Path(rules.sources[0]).read_text()
+    edited = tmp_path / "default.toml"
+    edited.write_text(text.replace(old, new))
+    assert edited.read_text() != text
+    return load_rules([edited])
+
+
 def no_conservation(tmp_path: Path, rules):
     """The default rules with ``conserve_objects = false``."""
-    text = Path(rules.sources[0]).read_text()
-    off = tmp_path / "default.toml"
-    off.write_text(text.replace("conserve_objects = true", "conserve_objects = false"))
-    assert off.read_text() != text
-    return load_rules([off])
+    return edited_defaults(tmp_path, rules, "conserve_objects = true", "conserve_objects = false")
 
 
 def test_one_unknown_carry_state_is_inferred_by_conservation(tmp_path: Path, rules):
