@@ -297,7 +297,7 @@ class MultiTargetTracker:
         reacquired = self._reacquire(seeds, t_ns)
         merged = self._merge_lost(t_ns, reacquired, pairs, seeds)
         parted = self._split_on_seeds(seeds, set(reacquired.values()))
-        self._split_out_of_reach()
+        parted |= self._split_out_of_reach(seeds, set(reacquired.values()) | parted)
         rel_v = self._candidate_rel_v(candidates, observations)
         self._label(pts, rel_v, t_ns, observations or {}, set(reacquired) | set(merged))
         transitions = self._advance_phases(t_ns, pairs, drifted, reacquired, merged)
@@ -789,20 +789,25 @@ class MultiTargetTracker:
             log.debug("t%d / t%d part on a new candidate at %s", tr.id, other.id, seed.position_m)
         return out
 
-    def _split_out_of_reach(self) -> None:
-        """Part combined pairs of two people's hands that one owner cannot reach.
+    def _split_out_of_reach(self, seeds: list[_Pending], used: set[int]) -> set[int]:
+        """Part combined pairs of two people's hands that one owner cannot reach; returns the
+        seeds used.
 
         A pair that joined two people's hands and then followed one of them home, while the
         other went unseen (three_people: after an exchange, the taker's hand in one view
         only), has no second mode to separate on, and keeps both labels on the hand it
         follows. Once its estimate has been farther than ``arm_reach_m`` +
         ``person_margin_m`` from one owner's head for ``out_of_reach_frames`` frame sets,
-        that owner's hand is not in it: the pair separates with the hand left behind where
-        the pair joined (its last known place, at rest), and the other keeps the estimate;
-        the owner rule (:meth:`_separate`) gives each its mode."""
+        that owner's hand is not in it: the pair separates, the other keeps the estimate,
+        and the hand left behind goes to the seed (unconfirmed too) nearest where the pair
+        joined that is within ``arm_reach_m`` of its owner's head, ``separate_distance_m``
+        or more from the pair (handshake: the hand was seen going home but its candidates
+        came and went, so no mode or seed lasted), else where the pair joined (its last
+        known place, at rest). The owner rule (:meth:`_separate`) gives each its mode."""
         lc, lcfg = self.cfg.lifecycle, self.cfg.labelling
+        out: set[int] = set()
         if lc.out_of_reach_frames <= 0:
-            return
+            return out
         for tr, other in self._combined_pairs():
             heads = self._owner_heads(tr, other)
             if heads is None or tr.joined_m is None or tr.apart_frames >= lc.separate_frames:
@@ -814,16 +819,52 @@ class MultiTargetTracker:
             tr.out_of_reach_frames = other.out_of_reach_frames = count
             if count < lc.out_of_reach_frames:
                 continue
-            split = np.array([tr.mean_m, tr.joined_m])
-            vel = np.array([tr.vel_mps, np.zeros(3)])
+            left_m, left_vel = tr.joined_m, np.zeros(3)
+            behind = np.flatnonzero(reach > lcfg.arm_reach_m + lcfg.person_margin_m)
+            if len(behind) == 1:
+                k = self._seed_of_left_hand(seeds, used | out, heads[behind[0]], tr)
+                if k is not None:
+                    left_m, left_vel = seeds[k].position_m, seeds[k].velocity_mps
+                    out.add(k)
+            split = np.array([tr.mean_m, left_m])
+            vel = np.array([tr.vel_mps, left_vel])
             for t in (tr, other):
                 t.split_m, t.split_vel_mps = split, vel
                 t.apart_frames = lc.separate_frames
                 t.split_gain_m = np.inf
                 t.out_of_reach_frames = 0
             log.debug(
-                "t%d / t%d part: %.2f m from a head, out of reach", tr.id, other.id, reach.max()
+                "t%d / t%d part: %.2f m from a head, out of reach; the other hand at %s",
+                tr.id,
+                other.id,
+                reach.max(),
+                left_m,
             )
+        return out
+
+    def _seed_of_left_hand(
+        self, seeds: list[_Pending], used: set[int], head_m: np.ndarray, pair: _Track
+    ) -> int | None:
+        """Index of the seed nearest where ``pair`` joined that is within ``arm_reach_m`` of
+        ``head_m`` and ``separate_distance_m`` or more from the pair's estimate; None if
+        there is none (:meth:`_split_out_of_reach`)."""
+        if pair.joined_m is None:
+            return None
+        best, best_d = None, np.inf
+        for k, seed in enumerate(seeds):
+            if k in used:
+                continue
+            if np.linalg.norm(seed.position_m - head_m) > self.cfg.labelling.arm_reach_m:
+                continue
+            if (
+                np.linalg.norm(seed.position_m - pair.mean_m)
+                < self.cfg.lifecycle.separate_distance_m
+            ):
+                continue
+            d = float(np.linalg.norm(seed.position_m - pair.joined_m))
+            if d < best_d:
+                best, best_d = k, d
+        return best
 
     def _owner_heads(self, a: _Track, b: _Track) -> np.ndarray | None:
         """(2, 3) the heads of a's and b's people when a and b are hands of two different

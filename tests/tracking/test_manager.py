@@ -855,6 +855,33 @@ def test_a_pair_that_follows_one_hand_out_of_the_others_reach_parts(rig, rng, fr
     assert np.linalg.norm(hands[f"p{pa}/right_hand"].mean_m - meet) < 0.1
 
 
+def test_a_pair_out_of_one_owners_reach_gives_that_owner_the_candidate_at_its_side(rig, rng):
+    """After a handshake the pair follows b's hand home while a's hand goes home unseen. a's
+    hand shows at a's side only in the frame set in which the pair has been out of a's
+    reach for out_of_reach_frames: too late to be a mode of the pair, too soon to be a
+    confirmed seed. The pair parts there, and a's tracker takes that candidate (before,
+    it was put where the hands met, where nothing is, and lost; a new tracker then took
+    a's hand: an identity switch)."""
+    frames, a, b, meet = shaking_hands(hold=6)
+    home_b = [meet + u * (b["right_hand"] - meet) for u in np.linspace(0, 1, 7)[1:]]
+    n_before = len(frames)
+    frames += [
+        [*_head_and_left(a), *_head_and_left(b), rb] + ([a["right_hand"]] if k >= 5 else [])
+        for k, rb in enumerate(home_b + [home_b[-1]] * 20)
+    ]
+    out = run(MultiTargetTracker(TrackingConfig(), rig, seed=11), frames, rng)
+    before = {s.label: s.target_id for s in out[n_before - 1].targets}
+    splits = [i for i, f in enumerate(out) for t in f.transitions if t.old is Phase.COMBINED]
+    starts = [t for f in out[n_before:] for t in f.transitions if t.old is Phase.UNINITIALISED]
+    assert splits == [n_before + 5] * 2  # the frame set of the out-of-reach test
+    assert not starts
+    _assert_right_hands_owned(out[-1], a, b)
+    after = {s.label: s for s in out[-1].targets}
+    for label in ("p1/right_hand", "p2/right_hand"):
+        assert after[label].target_id == before[label]
+        assert after[label].phase is Phase.NORMAL
+
+
 @pytest.mark.parametrize("leave_speed_mps", [3.0, 1e9])
 def test_a_ghost_that_stood_beside_the_hands_as_they_joined_does_not_part_them(
     rig, rng, leave_speed_mps
