@@ -814,15 +814,14 @@ class MultiTargetTracker:
                 tr.out_of_reach_frames = other.out_of_reach_frames = 0
                 continue
             reach = np.linalg.norm(heads - tr.mean_m, axis=1)
-            beyond = bool((reach > lcfg.arm_reach_m + lcfg.person_margin_m).any())
-            count = tr.out_of_reach_frames + 1 if beyond else 0
+            beyond = reach > lcfg.arm_reach_m + lcfg.person_margin_m
+            count = tr.out_of_reach_frames + 1 if beyond.any() else 0
             tr.out_of_reach_frames = other.out_of_reach_frames = count
             if count < lc.out_of_reach_frames:
                 continue
             left_m, left_vel = tr.joined_m, np.zeros(3)
-            behind = np.flatnonzero(reach > lcfg.arm_reach_m + lcfg.person_margin_m)
-            if len(behind) == 1:
-                k = self._seed_of_left_hand(seeds, used | out, heads[behind[0]], tr)
+            if beyond.sum() == 1:  # that owner's hand was left behind
+                k = self._seed_of_left_hand(seeds, used | out, heads[beyond][0], tr)
                 if k is not None:
                     left_m, left_vel = seeds[k].position_m, seeds[k].velocity_mps
                     out.add(k)
