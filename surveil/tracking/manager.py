@@ -821,7 +821,9 @@ class MultiTargetTracker:
                 continue
             left_m, left_vel = tr.joined_m, np.zeros(3)
             if beyond.sum() == 1:  # that owner's hand was left behind
-                k = self._seed_of_left_hand(seeds, used | out, heads[beyond][0], tr)
+                k = self._seed_of_left_hand(
+                    seeds, used | out, heads[beyond][0], tr.mean_m, tr.joined_m
+                )
                 if k is not None:
                     left_m, left_vel = seeds[k].position_m, seeds[k].velocity_mps
                     out.add(k)
@@ -842,28 +844,27 @@ class MultiTargetTracker:
         return out
 
     def _seed_of_left_hand(
-        self, seeds: list[_Pending], used: set[int], head_m: np.ndarray, pair: _Track
+        self,
+        seeds: list[_Pending],
+        used: set[int],
+        head_m: np.ndarray,
+        pair_m: np.ndarray,
+        joined_m: np.ndarray,
     ) -> int | None:
-        """Index of the seed nearest where ``pair`` joined that is within ``arm_reach_m`` of
-        ``head_m`` and ``separate_distance_m`` or more from the pair's estimate; None if
-        there is none (:meth:`_split_out_of_reach`)."""
-        if pair.joined_m is None:
+        """Index of the seed not in ``used`` nearest ``joined_m`` (where the pair joined) that
+        is within ``arm_reach_m`` of ``head_m`` and ``separate_distance_m`` or more from the
+        pair's estimate ``pair_m``; None if there is none (:meth:`_split_out_of_reach`)."""
+        free = [k for k in range(len(seeds)) if k not in used]
+        if not free:
             return None
-        best, best_d = None, np.inf
-        for k, seed in enumerate(seeds):
-            if k in used:
-                continue
-            if np.linalg.norm(seed.position_m - head_m) > self.cfg.labelling.arm_reach_m:
-                continue
-            if (
-                np.linalg.norm(seed.position_m - pair.mean_m)
-                < self.cfg.lifecycle.separate_distance_m
-            ):
-                continue
-            d = float(np.linalg.norm(seed.position_m - pair.joined_m))
-            if d < best_d:
-                best, best_d = k, d
-        return best
+        at = np.array([seeds[k].position_m for k in free])
+        ok = (np.linalg.norm(at - head_m, axis=1) <= self.cfg.labelling.arm_reach_m) & (
+            np.linalg.norm(at - pair_m, axis=1) >= self.cfg.lifecycle.separate_distance_m
+        )
+        if not ok.any():
+            return None
+        d = np.where(ok, np.linalg.norm(at - joined_m, axis=1), np.inf)
+        return free[int(np.argmin(d))]
 
     def _owner_heads(self, a: _Track, b: _Track) -> np.ndarray | None:
         """(2, 3) the heads of a's and b's people when a and b are hands of two different
