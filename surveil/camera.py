@@ -25,6 +25,15 @@ DIST_LENGTHS = (4, 5, 8, 12, 14)
 UNDISTORT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-14)
 
 
+def _undistort_points(px: np.ndarray, K: np.ndarray, dist: np.ndarray) -> np.ndarray:
+    """cv2.undistortPoints iterated to ``UNDISTORT_CRITERIA``: OpenCV 4 takes criteria only in
+    ``undistortPointsIter``, OpenCV 5 dropped that function and takes them in
+    ``undistortPoints``."""
+    if hasattr(cv2, "undistortPointsIter"):
+        return cv2.undistortPointsIter(px, K, dist, None, None, UNDISTORT_CRITERIA)
+    return cv2.undistortPoints(px, K, dist, criteria=UNDISTORT_CRITERIA)
+
+
 @dataclass(frozen=True, slots=True)
 class Camera:
     """One calibrated camera.
@@ -188,9 +197,7 @@ class Camera:
             return np.zeros((0, 2))
         # OpenCV's default iteration limit leaves ~1e-6 m errors at room scale; iterate to
         # convergence so back-projection inverts projection to float precision
-        return cv2.undistortPoints(
-            px.reshape(-1, 1, 2), self.K, self.dist, criteria=UNDISTORT_CRITERIA
-        ).reshape(-1, 2)
+        return _undistort_points(px.reshape(-1, 1, 2), self.K, self.dist).reshape(-1, 2)
 
     def backproject(self, pixels_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Lines of sight through pixels (undistorting first).
