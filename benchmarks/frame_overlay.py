@@ -72,20 +72,18 @@ def draw_camera(img, obs, cam, candidates_m, truth, points_m) -> np.ndarray:
         cv2.drawMarker(vis, (u, v), (0, 255, 255), cv2.MARKER_CROSS, 7)
         cv2.putText(vis, str(k), (x + w + 1, y + 8), 0, 0.35, (0, 255, 255), 1)
 
-    def mark(p_m, colour, marker, size):
-        uv, depth = cam.project(p_m[None])
-        if cam.in_image(uv, depth)[0]:
-            cv2.drawMarker(vis, tuple(int(round(c)) for c in uv[0]), colour, marker, size)
-        return uv[0]
+    def pixel(p_m) -> tuple[int, int] | None:
+        uv, depth = cam.project(np.asarray(p_m)[None])
+        return tuple(int(round(c)) for c in uv[0]) if cam.in_image(uv, depth)[0] else None
 
-    for p in candidates_m:
-        mark(p, (0, 0, 255), cv2.MARKER_TILTED_CROSS, 9)
-    for p in points_m:
-        mark(p, (255, 255, 255), cv2.MARKER_TILTED_CROSS, 13)
+    for colour, size, pts in (((0, 0, 255), 9, candidates_m), ((255, 255, 255), 13, points_m)):
+        for uv in filter(None, map(pixel, pts)):
+            cv2.drawMarker(vis, uv, colour, cv2.MARKER_TILTED_CROSS, size)
     for label, p in truth.items():
-        u, v = (int(round(c)) for c in mark(p, (255, 255, 0), cv2.MARKER_CROSS, 0))
-        cv2.circle(vis, (u, v), 10, (255, 255, 0), 1)
-        cv2.putText(vis, label, (u + 11, v + 4), 0, 0.35, (255, 255, 0), 1)
+        uv = pixel(p)
+        if uv is not None:
+            cv2.circle(vis, uv, 10, (255, 255, 0), 1)
+            cv2.putText(vis, label, (uv[0] + 11, uv[1] + 4), 0, 0.35, (255, 255, 0), 1)
     cv2.putText(vis, cam.name, (5, 15), 0, 0.5, (255, 255, 255), 1)
     return vis
 
@@ -103,7 +101,7 @@ def main(argv: list[str] | None = None) -> int:
 
     rec = open_recording(args.recording)
     cfg = load_pipeline_config(args.config)
-    gt = load_ground_truth(args.recording) if (args.recording / "ground_truth").is_dir() else None
+    gt = load_ground_truth(args.recording) if rec.ground_truth_dir is not None else None
     index = int(round(args.at * 1e9 / rec.period_ns))  # the grid index of the set
     last_s = rec.set_indices[-1] * rec.period_ns / 1e9
     if not 0 <= index <= rec.set_indices[-1]:
@@ -112,6 +110,9 @@ def main(argv: list[str] | None = None) -> int:
     if n_people is None and gt is not None:
         n_people = len({label.split("/")[0] for label in gt.labels})
     labels = list(gt.labels) if gt is not None else []
+    unknown = sorted(set(args.limb) - set(labels))
+    if unknown:
+        sys.exit(f"--limb {', '.join(unknown)}: not in the ground truth ({', '.join(labels)})")
     wanted = [lab for lab in labels if not args.limb or lab in args.limb]
     frame = None
     for fs, by_name, _ in observe_recording(rec, cfg, n_people, max_frames=index + 1):
@@ -174,9 +175,10 @@ def main(argv: list[str] | None = None) -> int:
     for k, p in enumerate(cands.points_m):
         near = "-"
         if truth_f is not None:
-            d = np.linalg.norm(gt.positions_m[truth_f] - p, axis=1)
-            j = int(np.nanargmin(d))
-            near = f"{labels[j]} {d[j] * 1000:.0f} mm"
+            d = np.linalg.norm(gt.positions_m[truth_f] - p, axis=1)  # NaN: not in the room
+            if np.isfinite(d).any():
+                j = int(np.nanargmin(d))
+                near = f"{labels[j]} {d[j] * 1000:.0f} mm"
         pair = ", ".join(
             f"c{c} b{b}: {owners.get((int(c), int(b)), '?')}"
             for c, b in zip(cands.cam_pairs[k], cands.blob_pairs[k], strict=True)
