@@ -1,0 +1,100 @@
+"""Two sets of runs side by side, per scene and seed: events matched and false, identity
+switches, hand error, false targets per frame.
+
+    python benchmarks/compare_runs.py --a CONFIG_A[,CONFIG_A2] --b CONFIG_B[,CONFIG_B2]
+        [--seeds 0-5] [--out out/bench_synth] [--all] [NAME ...]
+
+Reads the MCAPs that ``seed_spread.py --config FILE`` (or ``pipeline_bench.py``) wrote:
+``<name>.<stem>.seed<N>.mcap`` for each config file's stem; ``-`` stands for the default
+settings (``<name>.seed<N>.mcap``). Several configs for one side are read in turn, the first
+that has a run of a scene and seed counting: the usual way to compare a change is two
+frozen worktrees, each running ``seed_spread.py --seeds 0-2`` and ``--seeds 3-5`` in
+parallel under two config names (which may hold nothing but a comment), and this script
+then sees both halves as one side. Nothing is run here.
+
+Prints the rows that differ (``--all``: every row) and the totals of each side. Scenes and
+seeds where either side has no run are skipped and counted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from pipeline_bench import output_path, scene_names  # noqa: E402
+from seed_spread import parse_seeds  # noqa: E402
+
+from surveil.eval.score import EvalConfig, evaluate  # noqa: E402
+
+COLUMNS = ("matched", "false", "switches", "hand mm", "false / frame")
+
+
+def _configs(text: str) -> list[Path | None]:
+    return [None if part == "-" else Path(part) for part in text.split(",")]
+
+
+def _run(out: Path, name: str, configs: list[Path | None], seed: int) -> Path | None:
+    for config in configs:
+        mcap = output_path(out, name, config, seed)
+        if mcap.exists():
+            return mcap
+    return None
+
+
+def scores(out: Path, name: str, mcap: Path) -> tuple[int, int, int, float, float]:
+    """(events matched, false events, identity switches, mean hand error mm, false targets
+    per frame) of one run."""
+    report = evaluate(out / name, mcap, EvalConfig())
+    e, t = report.events, report.targets
+    return (
+        e.n_matched,
+        e.n_pred - e.n_matched,
+        t.id_switches,
+        t.hand_error_mm_mean or float("nan"),
+        t.false_targets_per_frame or 0.0,
+    )
+
+
+def _cells(row: tuple[int, int, int, float, float]) -> str:
+    return f"{row[0]} | {row[1]} | {row[2]} | {row[3]:.0f} | {row[4]:.2f}"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("names", nargs="*")
+    parser.add_argument("--a", required=True, help="config file(s) of side A, comma-separated")
+    parser.add_argument("--b", required=True, help="config file(s) of side B, comma-separated")
+    parser.add_argument("--seeds", type=parse_seeds, default=parse_seeds("0-5"))
+    parser.add_argument("--out", type=Path, default=ROOT / "out" / "bench_synth")
+    parser.add_argument("--all", action="store_true", help="print rows that agree too")
+    args = parser.parse_args(argv)
+    sides = (_configs(args.a), _configs(args.b))
+    totals = [[0, 0, 0], [0, 0, 0]]
+    skipped = 0
+    head = " | ".join(COLUMNS)
+    print(f"| scene | seed | A: {head} | B: {head} |")
+    print("|---|---|" + "---|" * (2 * len(COLUMNS)))
+    for name in scene_names(args):
+        for seed in args.seeds:
+            runs = [_run(args.out, name, configs, seed) for configs in sides]
+            if None in runs:
+                skipped += 1
+                continue
+            a, b = (scores(args.out, name, mcap) for mcap in runs)
+            for side, row in zip(totals, (a, b), strict=True):
+                for k in range(3):
+                    side[k] += row[k]
+            if args.all or a[:3] != b[:3]:
+                print(f"| {name} | {seed} | {_cells(a)} | {_cells(b)} |")
+    for label, side in zip("AB", totals, strict=True):
+        print(f"{label}: {side[0]} events matched, {side[1]} false, {side[2]} identity switches")
+    if skipped:
+        print(f"{skipped} scene and seed pairs skipped: a side has no run of them")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
