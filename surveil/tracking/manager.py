@@ -296,12 +296,13 @@ class MultiTargetTracker:
         seeds = self._update_seeds(pts, prior, dt_s, t_ns)
         reacquired = self._reacquire(seeds, t_ns)
         merged = self._merge_lost(t_ns, reacquired, pairs, seeds)
-        parted = self._split_on_seeds(seeds, set(reacquired.values()))
-        parted |= self._split_out_of_reach(seeds, set(reacquired.values()) | parted)
+        used = set(reacquired.values())  # seeds taken: no tracker starts on them
+        used |= self._split_on_seeds(seeds, used)
+        used |= self._split_out_of_reach(seeds, used)
         rel_v = self._candidate_rel_v(candidates, observations)
         self._label(pts, rel_v, t_ns, observations or {}, set(reacquired) | set(merged))
         transitions = self._advance_phases(t_ns, pairs, drifted, reacquired, merged)
-        transitions += self._initialise(seeds, set(reacquired.values()) | parted, t_ns)
+        transitions += self._initialise(seeds, used, t_ns)
         return self._frame(t_ns, transitions)
 
     def _step_s(self, t_ns: int) -> float:
