@@ -90,6 +90,27 @@ def _majority_silhouette(
     return votes.argmax(axis=1).astype(np.int32)
 
 
+def _outside_band(
+    ok: np.ndarray,
+    restored: np.ndarray,
+    centroids: np.ndarray,
+    sil_of: np.ndarray,
+    silhouettes: Silhouettes,
+    cfg: BlobConfig,
+) -> np.ndarray:
+    """(len(ok),) bool: the restored blobs of ``ok`` (0-based component indices) whose
+    centroid lies outside the band [restore_min_rel_v, restore_max_rel_v] of their
+    silhouette's height, where a hand hanging at the side is (docs/blobs.md)."""
+    comp = ok + 1
+    lab = sil_of[comp]
+    has = lab > 0
+    top = np.asarray(silhouettes.top_v_px)[np.maximum(lab, 1) - 1]
+    bottom = np.asarray(silhouettes.bottom_v_px)[np.maximum(lab, 1) - 1]
+    rel_v = (centroids[comp, 1] - top) / np.maximum(bottom - top, 1.0)
+    inside = has & (rel_v >= cfg.restore_min_rel_v) & (rel_v <= cfg.restore_max_rel_v)
+    return restored[comp] & ~inside
+
+
 def _fill_missing_limbs(
     ok: np.ndarray, restored: np.ndarray, areas: np.ndarray, sil_of: np.ndarray
 ) -> np.ndarray:
@@ -550,6 +571,8 @@ def _extract(
             sil_of_all = _majority_silhouette(
                 labels[inside], sil[inside], n_all, int(sil.max()) + 1
             )
+            if cfg.restore_min_rel_v > 0 or cfg.restore_max_rel_v < 1:
+                ok = ok[~_outside_band(ok, restored_comp, centroids, sil_of_all, silhouettes, cfg)]
             ok = _fill_missing_limbs(ok, restored_comp, areas, sil_of_all)
     n_h = max(n_people_hint if n_people_hint is not None else silhouettes.n, 1)
     n_keep = math.ceil(cfg.blob_excess * 3 * n_h)

@@ -217,11 +217,21 @@ class BlobConfig:
         min=0,
     )
     open_keeps_isolated: bool = setting(
-        False,
+        True,
         "a skin region that the opening would shrink below min_blob_area_px (a hand seen "
         "edge-on, two or three pixels wide) is kept whole where its silhouette has fewer than "
-        "three blobs (a head and two hands); two such blobs never pair into a candidate",
+        "three blobs (a head and two hands) and its centroid lies in the band of a hanging "
+        "hand (restore_min_rel_v..restore_max_rel_v); two such blobs never pair into a "
+        "candidate",
     )
+    restore_min_rel_v: float = setting(
+        0.4,
+        "a region open_keeps_isolated keeps becomes a blob only if its centroid's relative "
+        "height in its silhouette (0 top, 1 bottom) is at least this",
+        min=0.0,
+        max=1.0,
+    )
+    restore_max_rel_v: float = setting(0.7, "... and at most this", min=0.0, max=1.0)
 
     arm_length_rel: float = setting(
         0.0,

@@ -113,7 +113,12 @@ def test_open_keeps_isolated_restores_a_hand_seen_edge_on_and_still_cuts_rims():
     skin[40:56, 74:76] = True  # the other hand edge-on: 2 x 16 px ...
     skin[47:50, 73:76] = True  # ... with a 3 x 3 knuckle
     skin[30:50, 30] = True  # a one-pixel fringe, 20 px
-    cfg = BlobConfig(min_blob_area_px=16, silhouette_dilate_px=0, max_blob_area_rel=0.0)
+    cfg = BlobConfig(
+        min_blob_area_px=16,
+        silhouette_dilate_px=0,
+        max_blob_area_rel=0.0,
+        open_keeps_isolated=False,
+    )
     unopened = extract_blobs(skin, sil, dataclasses.replace(cfg, open_px=0))
     assert unopened.areas_px.tolist() == [399, 35, 20]  # head, rim and hand in one blob
     opened = extract_blobs(skin, sil, cfg)
@@ -130,6 +135,41 @@ def test_open_keeps_isolated_restores_a_hand_seen_edge_on_and_still_cuts_rims():
     full = extract_blobs(skin, sil, dataclasses.replace(cfg, open_keeps_isolated=True))
     assert full.areas_px.tolist() == [142, 34, 32]
     assert full.restored.tolist() == [False, False, False]
+
+
+def _edge_on_hand(skin: np.ndarray, top: int, col: int) -> None:
+    """A 2 x 16 px sliver with a 3 x 3 knuckle, rows top..top+16 (an edge-on hand)."""
+    skin[top : top + 16, col : col + 2] = True
+    skin[top + 7 : top + 10, col - 1 : col + 2] = True
+
+
+def test_restored_blobs_only_where_a_hanging_hand_can_be():
+    """With a band [restore_min_rel_v, restore_max_rel_v], a region the opening would erase
+    becomes a blob only at the height of a hand hanging at the side: a sliver by the shoulder
+    (a fold, a sleeve's edge) stays erased, one by the hip is kept."""
+    person, skin = _head_and_hand_joined_by_a_rim(6)
+    sil = silhouettes_from_mask(person, 10)  # top row 10, bottom row 90
+    _edge_on_hand(skin, 22, 74)  # centroid row ~30: rel_v 0.25
+    cfg = BlobConfig(
+        min_blob_area_px=16,
+        silhouette_dilate_px=0,
+        max_blob_area_rel=0.0,
+        open_keeps_isolated=True,
+        restore_min_rel_v=0.0,
+        restore_max_rel_v=1.0,
+    )
+    anywhere = extract_blobs(skin, sil, cfg)
+    assert anywhere.restored.tolist() == [False, True, False]
+    assert anywhere.rel_v[1] == pytest.approx(0.25, abs=0.02)
+    band = dataclasses.replace(cfg, restore_min_rel_v=0.4, restore_max_rel_v=0.7)
+    high = extract_blobs(skin, sil, band)
+    assert high.areas_px.tolist() == [142, 34]  # head and the plain hand only
+    assert high.restored is None or not high.restored.any()
+    _edge_on_hand(skin, 52, 70)  # centroid row ~60: rel_v 0.62
+    low = extract_blobs(skin, sil, band)
+    assert low.restored.tolist() == [False, True, False]
+    assert low.rel_v[1] == pytest.approx(0.62, abs=0.02)
+    assert low.centroids_px[1, 0] == pytest.approx(70.4, abs=0.2)
 
 
 def test_ignores_skin_outside_silhouettes_and_computes_rel_v():
