@@ -264,6 +264,13 @@ class BlobConfig:
         min=0.0,
     )
 
+    def __post_init__(self) -> None:
+        if self.restore_min_rel_v > self.restore_max_rel_v:
+            raise ValueError(
+                f"restore_min_rel_v ({self.restore_min_rel_v}) must not exceed "
+                f"restore_max_rel_v ({self.restore_max_rel_v}): the band would keep nothing"
+            )
+
     def background_requests(self, foreground_share: bool = False) -> dict[str, bool]:
         """What this stage needs from ``BackgroundModel.step`` besides the silhouettes
         (``foreground_share``: a later stage reads ``BlobSet.foreground_share``)."""

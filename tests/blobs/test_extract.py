@@ -433,3 +433,16 @@ def test_blobs_found_near_people_are_those_of_the_whole_frame(small_recording):
             np.testing.assert_allclose(got.rel_v, want.rel_v, atol=1e-12)
             compared += len(want)
     assert compared > 100  # blobs, not empty frames, were compared
+
+
+def test_an_empty_restore_band_is_a_config_error_naming_the_table(tmp_path):
+    from surveil.errors import ConfigError
+    from surveil.pipeline import load_pipeline_config
+
+    path = tmp_path / "band.toml"
+    path.write_text("[blobs]\nrestore_min_rel_v = 0.7\nrestore_max_rel_v = 0.4\n")
+    with pytest.raises(ConfigError, match="blobs: restore_min_rel_v .* must not exceed"):
+        load_pipeline_config(path)
+    path.write_text("[blobs]\nrestore_max_rel_v = 1.5\n")
+    with pytest.raises(ConfigError, match="restore_max_rel_v must be <= 1"):
+        load_pipeline_config(path)
