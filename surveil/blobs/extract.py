@@ -84,8 +84,9 @@ def _majority_silhouette(
     >>> _majority_silhouette(np.array([0, 0, 0, 1]), np.array([2, 2, 1, 0]), 2, 3).tolist()
     [2, 1]
     """
-    votes = np.zeros((n_blobs, n_sil), np.int64)
-    np.add.at(votes, (blob_px, sil_px), 1)
+    votes = np.bincount(blob_px * n_sil + sil_px, minlength=n_blobs * n_sil).reshape(
+        n_blobs, n_sil
+    )
     votes[:, 0] = -1
     return votes.argmax(axis=1).astype(np.int32)
 
