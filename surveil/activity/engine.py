@@ -24,9 +24,12 @@ below its shoulder and at least ``min_reach_m`` from its head horizontally
 (:func:`~.predicates.away_from_body`; heads are taken from the same person's ``pN/head``
 target), with no other target within ``coincidence_m``, after a reach (it was ``separation_m``
 or more from the still point at most ``max_approach_s`` before): the ballistic reach-stop of
-§7.3.1. Climax = the moment the hand stopped; "before" = the carry estimate at the start of the
-reach; "after" = the estimate ``separation_delay_s`` after the hand is ``separation_m`` from the
-still point again (the return), or at ``separation_timeout_s`` after the stop was detected.
+§7.3.1. Climax = the contact, the first moment the resting hand is lowest
+(:func:`_contact_ns`); "before" = the carry estimate at the start of the reach; "after" =
+the estimate ``separation_delay_s`` after the hand is ``separation_m`` from the still point
+again (the return), or at ``separation_timeout_s`` after the hand was last within
+``coincidence_m`` of its still point (a hand resting there longer delays the decision, which
+has no "after" to go on yet), at most ``max_coincidence_s`` after the stop was detected.
 When the hand's tracker is lost and another takes its label, the episode goes on with that
 tracker.
 At the step where the hand is ``separation_m`` from the still point, its id is listed in
@@ -53,7 +56,7 @@ from __future__ import annotations
 import logging
 from collections import deque
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -118,6 +121,28 @@ class _StillEpisode:
     point_m: np.ndarray
     before: CarryEstimate | None
     apart_ns: int | None = None
+    resting_ns: int = 0  # the last time the hand was within coincidence_m of the point
+    # (t_ns, height m) of the hand while it rests there: the contact is where it is lowest
+    rest_heights: list[tuple[int, float]] = field(default_factory=list)
+
+
+def _contact_ns(st: _StillEpisode, smooth: int = 3, tolerance_m: float = 0.01) -> int:
+    """The climax of a pick or place: the first moment the resting hand is lowest (its
+    height averaged over ``smooth`` frame sets, within ``tolerance_m`` of the least), when it
+    touches the object or puts it down. A hand that stops above the table and then lowers the
+    object (the demo's place: 4-5 cm) touches the table later than it stops; one that rests
+    at one height touches it when it stops. The rest is the hand's samples within
+    ``coincidence_m`` of its point, less the last ``still_s``: a sample is at rest only if
+    the hand stayed for ``still_s`` after it, and a hand that leaves downwards (pick_place's
+    place) dips as it goes."""
+    end_ns = st.resting_ns - _ns(st.rule.thresholds.still_s)
+    heights = [(t, z) for t, z in st.rest_heights if t <= end_ns]
+    if len(heights) < smooth:
+        return st.climax_ns
+    ts = np.array([t for t, _ in heights], dtype=np.int64)
+    z = np.convolve([h for _, h in heights], np.ones(smooth) / smooth, mode="valid")
+    first = int(np.flatnonzero(z <= z.min() + tolerance_m)[0])
+    return st.climax_ns if first == 0 else max(st.climax_ns, int(ts[first + smooth // 2]))
 
 
 def _heir(cur: _Frame, label: str, lost_id: int) -> TargetSnapshot | None:
@@ -744,6 +769,10 @@ class ActivityEngine:
                     detected_ns=cur.t_ns,
                     point_m=point,
                     before=before,
+                    resting_ns=cur.t_ns,
+                    rest_heights=[
+                        (int(t), float(z)) for t, z in zip(ts[first:], ps[first:, 2], strict=True)
+                    ],
                 )
                 log.debug("%s: %s still at %d ns", rule.rule_id, hand.label, climax)
 
@@ -788,16 +817,25 @@ class ActivityEngine:
                 self._still_disarmed[key] = st.point_m
                 continue
             if st.apart_ns is None and snap is not None:
-                if float(np.linalg.norm(snap.mean_m - st.point_m)) >= th.separation_m:
+                gap_m = float(np.linalg.norm(snap.mean_m - st.point_m))
+                if gap_m >= th.separation_m:
                     st.apart_ns = t
                     if st.hand_id not in self._released:
                         self._released.append(st.hand_id)
+                elif gap_m < th.coincidence_m and snap.phase is not Phase.LOST:
+                    st.resting_ns = t
+                    st.rest_heights.append((t, float(snap.mean_m[2])))
             ready = (
                 st.apart_ns is not None
                 and t - st.apart_ns >= _ns(th.separation_delay_s)
                 and self._after_known(st.rule, [self._carry_since(st.hand_id, t, st.apart_ns)])
             )
-            timed_out = t - st.detected_ns >= _ns(th.separation_timeout_s)
+            # the carry state "after" exists only once the hand has left: while it rests at
+            # the point (a careful place, demo seed 1: about 2.1 s) the timeout waits, up to
+            # max_coincidence_s from the stop
+            timed_out = t - st.resting_ns >= _ns(th.separation_timeout_s) or (
+                t - st.detected_ns >= _ns(th.max_coincidence_s)
+            )
             if ready or timed_out:
                 ev = self._decide_still(st, cur, timed_out=not ready)
                 events += [ev] if ev else []
@@ -835,7 +873,7 @@ class ActivityEngine:
         return ActivityEvent(
             activity=rule.name,
             start_ns=min(st.start_ns, st.climax_ns),
-            climax_ns=st.climax_ns,
+            climax_ns=_contact_ns(st),
             end_ns=max(cur.t_ns, st.climax_ns),
             actors=(st.label,),
             persons=_persons((st.label,)),

@@ -90,13 +90,15 @@ class Thresholds:
     )
     separation_timeout_s: float = setting(
         2.0,
-        "decide anyway this long after the separation (pick/place: after the still moment), s",
+        "decide anyway this long after the separation (pick/place: after the hand last rested "
+        "within coincidence_m of its still point), s",
         min=0.0,
         max=60.0,
     )
     max_coincidence_s: float = setting(
         10.0,
-        "give up an episode whose limbs stay together longer than this, s",
+        "give up an episode whose limbs stay together (pick/place: whose hand rests) longer "
+        "than this, s",
         min=0.1,
         max=600.0,
     )

@@ -334,6 +334,74 @@ def test_place_waits_for_carry_evidence_from_after_the_hand_left(rules):
     assert ev.end_ns >= 2.6 * S
 
 
+def test_a_place_resting_longer_than_the_timeout_is_decided_when_the_hand_leaves(rules):
+    """The hand holds the object at the table point from 1.1 s to 4.0 s and lets go at
+    3.5 s (demo, seed 1: a careful place, about 2.1 s at rest). Deciding 2 s
+    (separation_timeout_s) after the stop would read the carry state while the hand still
+    holds the object, and miss the place; the timeout waits while the hand rests within
+    coincidence_m of its point."""
+    path = keyframes(
+        (0.5, P1_RIGHT_REST),
+        (1.1, (0.6, -0.2, 0.95)),
+        (4.0, (0.6, -0.2, 0.95)),
+        (4.6, (0.25, -0.15, 1.0)),
+    )
+    script = Script(
+        [
+            head(1, 1, 0.0),
+            hand(2, 1, L, still(*P1_LEFT_REST)),
+            hand(3, 1, R, path, switch(3.5, holding(BLUE), empty())),
+        ]
+    )
+    script.duration_s = 6.0
+    ev = only(run(rules, script.stream()), "place")
+    assert ev.confidence == pytest.approx(0.9)  # decided on the return, not timed out
+    assert abs(ev.climax_ns - 1.1 * S) <= 0.1 * S
+    assert ev.end_ns >= 4.0 * S
+
+
+def test_a_place_lowered_after_the_stop_has_its_climax_at_the_contact(rules):
+    """The hand stops 5 cm above the table at 1.1 s, lowers the object onto it from 2.4 to
+    2.8 s, lets go and leaves at 3.4 s: the place's climax is the contact (the hand lowest,
+    2.8 s), as the ground truth has it, not the stop 1.7 s earlier."""
+    above, on = (0.6, -0.2, 1.0), (0.6, -0.2, 0.95)
+    path = keyframes(
+        (0.5, P1_RIGHT_REST),
+        (1.1, above),
+        (2.4, above),
+        (2.8, on),
+        (3.4, on),
+        (4.0, (0.25, -0.15, 1.0)),
+    )
+    script = Script(
+        [
+            head(1, 1, 0.0),
+            hand(2, 1, L, still(*P1_LEFT_REST)),
+            hand(3, 1, R, path, switch(3.1, holding(BLUE), empty())),
+        ]
+    )
+    script.duration_s = 5.0
+    ev = only(run(rules, script.stream()), "place")
+    assert abs(ev.climax_ns - 2.8 * S) <= 0.1 * S
+
+
+def test_a_hand_resting_at_its_still_point_for_good_is_decided_by_max_coincidence(rules):
+    """A hand that never leaves its point (a tracker left on a ghost) is decided, as a
+    timeout, max_coincidence_s (10 s) after its stop: the episode does not wait for ever."""
+    path = keyframes((0.5, P1_RIGHT_REST), (1.1, (0.6, -0.2, 0.95)))
+    script = Script(
+        [
+            head(1, 1, 0.0),
+            hand(2, 1, L, still(*P1_LEFT_REST)),
+            hand(3, 1, R, path, switch(1.35, empty(), holding(BLUE))),
+        ]
+    )
+    script.duration_s = 13.0
+    ev = only(run(rules, script.stream()), "pick")
+    assert ev.confidence == pytest.approx(0.45)  # a timeout
+    assert 11.3 * S <= ev.end_ns <= 11.6 * S
+
+
 def test_a_hand_leaving_its_still_point_is_released_once(rules):
     """The pipeline restarts the carry window of a hand that leaves its still point (the
     reach in ``reach`` stops at 1.1-1.6 s, then returns): the engine names it once, at the
