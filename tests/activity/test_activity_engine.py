@@ -71,7 +71,14 @@ def one_person(left_carry=None, right_carry=None, *, join=True, height=1.2):
 
 def reach(carry, *, point=(0.6, -0.2, 0.95)):
     """p1's right hand reaches to a table point (arrives 1.1 s), stays 0.5 s, returns."""
-    path = keyframes((0.5, P1_RIGHT_REST), (1.1, point), (1.6, point), (2.2, (0.25, -0.15, 1.0)))
+    return move_right_hand(
+        keyframes((0.5, P1_RIGHT_REST), (1.1, point), (1.6, point), (2.2, (0.25, -0.15, 1.0))),
+        carry,
+    )
+
+
+def move_right_hand(path, carry):
+    """p1 with the left hand at rest and the right hand along ``path``, carrying ``carry``."""
     return Script(
         [head(1, 1, 0.0), hand(2, 1, L, still(*P1_LEFT_REST)), hand(3, 1, R, path, carry)]
     )
@@ -346,13 +353,7 @@ def test_a_place_resting_longer_than_the_timeout_is_decided_when_the_hand_leaves
         (4.0, (0.6, -0.2, 0.95)),
         (4.6, (0.25, -0.15, 1.0)),
     )
-    script = Script(
-        [
-            head(1, 1, 0.0),
-            hand(2, 1, L, still(*P1_LEFT_REST)),
-            hand(3, 1, R, path, switch(3.5, holding(BLUE), empty())),
-        ]
-    )
+    script = move_right_hand(path, switch(3.5, holding(BLUE), empty()))
     script.duration_s = 6.0
     ev = only(run(rules, script.stream()), "place")
     assert ev.confidence == pytest.approx(0.9)  # decided on the return, not timed out
@@ -373,13 +374,7 @@ def test_a_place_lowered_after_the_stop_has_its_climax_at_the_contact(rules):
         (3.4, on),
         (4.0, (0.25, -0.15, 1.0)),
     )
-    script = Script(
-        [
-            head(1, 1, 0.0),
-            hand(2, 1, L, still(*P1_LEFT_REST)),
-            hand(3, 1, R, path, switch(3.1, holding(BLUE), empty())),
-        ]
-    )
+    script = move_right_hand(path, switch(3.1, holding(BLUE), empty()))
     script.duration_s = 5.0
     ev = only(run(rules, script.stream()), "place")
     assert abs(ev.climax_ns - 2.8 * S) <= 0.1 * S
@@ -389,13 +384,7 @@ def test_a_hand_resting_at_its_still_point_for_good_is_decided_by_max_coincidenc
     """A hand that never leaves its point (a tracker left on a ghost) is decided, as a
     timeout, max_coincidence_s (10 s) after its stop: the episode does not wait for ever."""
     path = keyframes((0.5, P1_RIGHT_REST), (1.1, (0.6, -0.2, 0.95)))
-    script = Script(
-        [
-            head(1, 1, 0.0),
-            hand(2, 1, L, still(*P1_LEFT_REST)),
-            hand(3, 1, R, path, switch(1.35, empty(), holding(BLUE))),
-        ]
-    )
+    script = move_right_hand(path, switch(1.35, empty(), holding(BLUE)))
     script.duration_s = 13.0
     ev = only(run(rules, script.stream()), "pick")
     assert ev.confidence == pytest.approx(0.45)  # a timeout
