@@ -19,7 +19,9 @@ seeds where either side has no run are skipped and counted.
 from __future__ import annotations
 
 import argparse
+import statistics
 import sys
+from dataclasses import dataclass, field
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -44,18 +46,47 @@ def _run(out: Path, name: str, configs: list[Path | None], seed: int) -> Path | 
     return None
 
 
-def scores(out: Path, name: str, mcap: Path) -> tuple[int, int, int, float, float]:
+@dataclass
+class Pooled:
+    """Issue 5's event figures pooled over runs: every matched event's climax error (ms) and
+    the exchanges with a true direction, and how many of those were right."""
+
+    climax_errors_ms: list[float] = field(default_factory=list)
+    n_direction: int = 0
+    n_direction_right: int = 0
+
+    def add(self, other: Pooled) -> None:
+        self.climax_errors_ms += other.climax_errors_ms
+        self.n_direction += other.n_direction
+        self.n_direction_right += other.n_direction_right
+
+    def summary(self) -> str:
+        errs = self.climax_errors_ms
+        median = f"{statistics.median(errs):.0f} ms" if errs else "-"
+        return (
+            f"median climax error {median} over {len(errs)} matched events, exchange "
+            f"direction right in {self.n_direction_right} of {self.n_direction}"
+        )
+
+
+def scores(out: Path, name: str, mcap: Path) -> tuple[tuple[int, int, int, float, float], Pooled]:
     """(events matched, false events, identity switches, mean hand error mm, false targets
-    per frame) of one run."""
+    per frame) of one run, and its matched events' climax errors and exchange directions."""
     report = evaluate(out / name, mcap, EvalConfig())
     e, t = report.events, report.targets
-    return (
+    row = (
         e.n_matched,
         e.n_pred - e.n_matched,
         t.id_switches,
         t.hand_error_mm_mean or float("nan"),
         t.false_targets_per_frame or 0.0,
     )
+    pooled = Pooled(
+        [x for a in e.activities for x in a.climax_errors_ms],
+        sum(a.n_direction for a in e.activities),
+        sum(a.n_direction_right for a in e.activities),
+    )
+    return row, pooled
 
 
 def _cells(row: tuple[int, int, int, float, float]) -> str:
@@ -73,6 +104,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     sides = (_configs(args.a), _configs(args.b))
     totals = [[0, 0, 0], [0, 0, 0]]
+    pooled = [Pooled(), Pooled()]
     skipped = 0
     head = " | ".join(COLUMNS)
     print(f"| scene | seed | A: {head} | B: {head} |")
@@ -83,14 +115,19 @@ def main(argv: list[str] | None = None) -> int:
             if None in runs:
                 skipped += 1
                 continue
-            a, b = (scores(args.out, name, mcap) for mcap in runs)
+            (a, pa), (b, pb) = (scores(args.out, name, mcap) for mcap in runs)
             for side, row in zip(totals, (a, b), strict=True):
                 for k in range(3):
                     side[k] += row[k]
+            pooled[0].add(pa)
+            pooled[1].add(pb)
             if args.all or a[:3] != b[:3]:
                 print(f"| {name} | {seed} | {_cells(a)} | {_cells(b)} |")
-    for label, side in zip("AB", totals, strict=True):
-        print(f"{label}: {side[0]} events matched, {side[1]} false, {side[2]} identity switches")
+    for label, side, pool in zip("AB", totals, pooled, strict=True):
+        print(
+            f"{label}: {side[0]} events matched, {side[1]} false, {side[2]} identity switches; "
+            + pool.summary()
+        )
     if skipped:
         print(f"{skipped} scene and seed pairs skipped: a side has no run of them")
     return 0

@@ -117,6 +117,9 @@ class ActivityScore:
     climax_error_ms_median: float | None
     direction_accuracy: float | None
     actors_accuracy: float | None
+    climax_errors_ms: tuple[float, ...] = ()  # one per matched event (to pool over runs)
+    n_direction: int = 0  # matched events with a true giver and taker
+    n_direction_right: int = 0  # ... whose predicted from/to are right
 
 
 @dataclass(frozen=True, slots=True)
@@ -574,6 +577,9 @@ def score_activity(
         climax_error_ms_median=median_ms,
         direction_accuracy=ratio(n_dir_ok, n_dir),
         actors_accuracy=ratio(n_act_ok, n_tp),
+        climax_errors_ms=tuple(float(x) for x in 1000.0 * cost_s[ti, pi]) if n_tp else (),
+        n_direction=n_dir,
+        n_direction_right=int(n_dir_ok),
     )
 
 

@@ -382,6 +382,7 @@ def test_reversed_exchange_direction(rec: Path, rig: Rig, gt: GroundTruth, tmp_p
     report = evaluate(rec, write_prediction(tmp_path / "x.mcap", gt, rig, events=events), CFG)
     exchange = next(s for s in report.events.activities if s.activity == "exchange")
     assert exchange.recall == 1.0 and exchange.direction_accuracy == 0.0
+    assert exchange.n_direction == exchange.n_matched and exchange.n_direction_right == 0
     assert exchange.actors_accuracy == 1.0
 
 
@@ -409,6 +410,9 @@ def test_events_shifted_beyond_tolerance_are_missed(
     assert all(
         s.climax_error_ms_mean == pytest.approx(250.0) for s in ev.activities if s.n_matched
     )
+    # every matched event's error, to pool over runs (benchmarks/compare_runs.py)
+    errors = [x for s in ev.activities for x in s.climax_errors_ms]
+    assert len(errors) == ev.n_matched and errors == pytest.approx([250.0] * ev.n_matched)
 
 
 def test_extra_false_event_lowers_precision(
