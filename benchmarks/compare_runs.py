@@ -26,8 +26,12 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
-from pipeline_bench import output_path, scene_names  # noqa: E402
-from seed_spread import parse_seeds  # noqa: E402
+from pipeline_bench import (  # noqa: E402
+    add_scene_arguments,
+    output_path,
+    parse_seeds,
+    scene_names,
+)
 
 from surveil.eval.score import EvalConfig, evaluate  # noqa: E402
 
@@ -95,7 +99,7 @@ def _cells(row: tuple[int, int, int, float, float]) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("names", nargs="*")
+    add_scene_arguments(parser)
     parser.add_argument("--a", required=True, help="config file(s) of side A, comma-separated")
     parser.add_argument("--b", required=True, help="config file(s) of side B, comma-separated")
     parser.add_argument("--seeds", type=parse_seeds, default=parse_seeds("0-5"))

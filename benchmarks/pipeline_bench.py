@@ -39,11 +39,52 @@ def output_path(out_dir: Path, name: str, config: Path | None, seed: int) -> Pat
     return out_dir / f"{stem}.seed{seed}.mcap"
 
 
+def parse_seeds(text: str) -> list[int]:
+    """Seeds from ``"0-5"``, ``"0,2,7"`` or a mix (``"0-2,9"``).
+
+    >>> parse_seeds("0-2,9")
+    [0, 1, 2, 9]
+    """
+    seeds: list[int] = []
+    for part in text.split(","):
+        lo, _, hi = part.strip().partition("-")
+        try:
+            first, last = int(lo), int(hi or lo)
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"seeds must look like 0-5 or 0,2,7, got {text!r}"
+            ) from None
+        if last < first:
+            raise argparse.ArgumentTypeError(f"empty seed range {part!r} in {text!r}")
+        seeds.extend(range(first, last + 1))
+    return seeds
+
+
+def scenario_of(name: str) -> tuple[Path, int | None]:
+    """The bundled scenario file and scene seed of a scene name: ``demo`` is the bundled
+    take, ``demo@11`` the take rendered with ``[scene] seed = 11`` (held out: the settings
+    were tuned on the bundled takes).
+
+    >>> [(p.name, s) for p, s in map(scenario_of, ["demo", "demo@11"])]
+    [('demo.toml', None), ('demo.toml', 11)]
+    """
+    base, at, seed = name.partition("@")
+    path = ROOT / "recordings" / f"{base}.toml"
+    if not path.is_file():
+        raise SystemExit(f"no bundled scenario {base!r} (recordings/{base}.toml)")
+    if not at:
+        return path, None
+    if not seed.isdigit():
+        raise SystemExit(f"scene {name!r}: the scene seed after '@' must be a number >= 0")
+    return path, int(seed)
+
+
 def bench(
     name: str, out_dir: Path, seed: int, config: Path | None = None
 ) -> tuple[object, object, float]:
     rec_dir = out_dir / name
-    synthesise(ROOT / "recordings" / f"{name}.toml", rec_dir)
+    scenario, scene_seed = scenario_of(name)
+    synthesise(scenario, rec_dir, scene_seed=scene_seed)
     use_one_opencv_thread()  # as `surveil run`
     rec = open_recording(rec_dir)
     mcap = output_path(out_dir, name, config, seed)
@@ -55,10 +96,25 @@ def bench(
     return report, summary, summary.n_framesets / summary.wall_s
 
 
+def add_scene_arguments(parser: argparse.ArgumentParser) -> None:
+    """Scene names (``NAME`` or ``NAME@SCENE_SEED``) and ``--scene-seeds``."""
+    parser.add_argument(
+        "names",
+        nargs="*",
+        help="bundled scenes (default: all); NAME@N is the take with scene seed N",
+    )
+    parser.add_argument(
+        "--scene-seeds",
+        default=None,
+        help="held-out takes instead of the bundled ones: every scene rendered with each of "
+        "these scene seeds (e.g. 101-102), named NAME@N",
+    )
+
+
 def add_run_arguments(parser: argparse.ArgumentParser) -> None:
     """The options of a script that reads the runs this script writes: scenes, output
     folder, seed, settings, and whether to run again."""
-    parser.add_argument("names", nargs="*")
+    add_scene_arguments(parser)
     parser.add_argument("--out", type=Path, default=ROOT / "out" / "bench_synth")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--rerun", action="store_true", help="run the pipeline again")
@@ -66,8 +122,12 @@ def add_run_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def scene_names(args: argparse.Namespace) -> list[str]:
-    """The scenes named, or every bundled recording."""
-    return args.names or sorted(p.stem for p in (ROOT / "recordings").glob("*.toml"))
+    """The scenes named, or every bundled recording; with ``--scene-seeds``, each of them
+    as every take named there."""
+    names = args.names or sorted(p.stem for p in (ROOT / "recordings").glob("*.toml"))
+    if getattr(args, "scene_seeds", None) is None:
+        return names
+    return [f"{n}@{s}" for n in names for s in parse_seeds(args.scene_seeds)]
 
 
 def run_of(name: str, args: argparse.Namespace) -> Path:
@@ -81,7 +141,7 @@ def run_of(name: str, args: argparse.Namespace) -> Path:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("names", nargs="*")
+    add_scene_arguments(parser)
     parser.add_argument("--out", type=Path, default=ROOT / "out" / "bench_synth")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument(

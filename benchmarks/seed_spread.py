@@ -27,28 +27,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from pipeline_bench import ROOT, bench
-
-
-def parse_seeds(text: str) -> list[int]:
-    """Seeds from ``"0-5"``, ``"0,2,7"`` or a mix (``"0-2,9"``).
-
-    >>> parse_seeds("0-2,9")
-    [0, 1, 2, 9]
-    """
-    seeds: list[int] = []
-    for part in text.split(","):
-        lo, _, hi = part.strip().partition("-")
-        try:
-            first, last = int(lo), int(hi or lo)
-        except ValueError:
-            raise argparse.ArgumentTypeError(
-                f"seeds must look like 0-5 or 0,2,7, got {text!r}"
-            ) from None
-        if last < first:
-            raise argparse.ArgumentTypeError(f"empty seed range {part!r} in {text!r}")
-        seeds.extend(range(first, last + 1))
-    return seeds
+from pipeline_bench import ROOT, add_scene_arguments, bench, parse_seeds, scene_names
 
 
 def f1(matched: int, n_true: int, n_pred: int) -> float:
@@ -57,14 +36,14 @@ def f1(matched: int, n_true: int, n_pred: int) -> float:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("names", nargs="*")
+    add_scene_arguments(parser)
     parser.add_argument("--seeds", type=parse_seeds, default=parse_seeds("0-5"))
     parser.add_argument("--out", type=Path, default=ROOT / "out" / "bench_synth")
     parser.add_argument(
         "--config", type=Path, help="pipeline settings (TOML); output <name>.<stem>.seed<N>.mcap"
     )
     args = parser.parse_args(argv)
-    names = args.names or sorted(p.stem for p in (ROOT / "recordings").glob("*.toml"))
+    names = scene_names(args)
     per_seed: list[tuple[int, int, int, int]] = []  # seed, true, predicted, matched
     by_activity: dict[tuple[str, str], list[int]] = {}  # true, predicted, matched summed
     tracking: dict[str, list[tuple[float, ...]]] = {}  # per scenario, one row per seed

@@ -88,6 +88,7 @@ def cmd_synth(args: argparse.Namespace) -> ExitCode:
         preview_times_s=tuple(args.preview_at or ()),
         overwrite=args.force,
         on_progress=progress_bar(f"synth {args.scenario.stem}", args.quiet),
+        scene_seed=args.seed,
     )
     elapsed = time.perf_counter() - t0
     print(summary.describe())
@@ -403,6 +404,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="contact sheet at this time (repeatable; default: event climaxes)",
     )
     p.add_argument("--force", action="store_true", help="overwrite an existing output")
+    p.add_argument(
+        "--seed",
+        type=int,
+        default=None,
+        help="replace the scenario's [scene] seed: another take of the same script (its own "
+        "timing variations, calibration error, noise, dropped frames)",
+    )
     p.set_defaults(command=cmd_synth)
 
     p = sub.add_parser("info", help="describe a recording: cameras, frames, sync statistics")

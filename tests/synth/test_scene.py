@@ -171,6 +171,32 @@ def test_same_seed_gives_identical_ground_truth_and_reuses_up_to_date_output(
     assert synthesise(small_scenario, out).reused
 
 
+def test_another_scene_seed_is_another_take_of_the_same_script(
+    small_scenario, small_recording, tmp_path
+):
+    """`surveil synth --seed N`: the same people and actions, but other timing variations,
+    calibration error and noise; the bundled take is not reused for it, nor it for the
+    bundled take."""
+    out = tmp_path / "take"
+    assert main(["synth", str(small_scenario), "--out", str(out), "--seed", "5"]) == ExitCode.OK
+    bundled, take = load_ground_truth(small_recording), load_ground_truth(out)
+    assert take.meta["seed"] == 5 != bundled.meta["seed"]
+    assert take.labels == bundled.labels
+    assert [e.activity for e in take.events] == [e.activity for e in bundled.events]
+    assert not np.array_equal(take.positions_m, bundled.positions_m, equal_nan=True)
+    assert (out / "rig.yaml").read_bytes() != (small_recording / "rig.yaml").read_bytes()
+    assert synthesise(small_scenario, out, scene_seed=5).reused
+    assert not synthesise(small_scenario, out, overwrite=True).reused
+    assert load_ground_truth(out).meta["seed"] == bundled.meta["seed"]
+
+
+def test_a_negative_scene_seed_is_refused(small_scenario, tmp_path, capsys):
+    code = main(["synth", str(small_scenario), "--out", str(tmp_path / "x"), "--seed", "-1"])
+    assert code == ExitCode.BAD_INPUT
+    assert "scene seed must be >= 0, got -1" in capsys.readouterr().err
+    assert not (tmp_path / "x").exists()
+
+
 def test_synth_refuses_to_overwrite_a_foreign_directory(small_scenario, tmp_path, capsys):
     (tmp_path / "mine").mkdir()
     (tmp_path / "mine" / "notes.txt").write_text("keep me")
