@@ -40,6 +40,7 @@ from pathlib import Path
 
 import numpy as np
 from front_end import observe_recording
+from pipeline_bench import add_scene_arguments, render, scene_names
 
 from surveil.datatypes import CameraObservation
 from surveil.io.ground_truth import load_ground_truth
@@ -54,7 +55,6 @@ from surveil.recon.candidates import (
 )
 from surveil.recon.settings import CandidateConfig
 from surveil.recon.triangulate import closest_points
-from surveil.synth.scene import synthesise
 
 ROOT = Path(__file__).resolve().parents[1]
 CAUSES = (
@@ -226,7 +226,7 @@ def misses_of(
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("names", nargs="*")
+    add_scene_arguments(parser)
     parser.add_argument("--out", type=Path, default=ROOT / "out" / "bench_synth")
     parser.add_argument("--max-frames", type=int, default=None)
     parser.add_argument("--radius-px", type=float, default=10.0, help="R, px")
@@ -239,16 +239,12 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = parser.parse_args(argv)
     config = load_pipeline_config(args.config)
-    paths = [ROOT / "recordings" / f"{n}.toml" for n in args.names] or sorted(
-        (ROOT / "recordings").glob("*.toml")
-    )
     limb_tables: dict[str, tuple[Counter, Counter]] = {}
     print("Fractions of the true limb-frames seen by >= 2 cameras, lost at each stage:\n")
     print("| scenario | limb-frames | false / set | missed | " + " | ".join(CAUSES) + " |")
     print("|---|---|---|---|" + "---|" * len(CAUSES))
-    for path in paths:
-        rec_dir = args.out / path.stem
-        synthesise(path, rec_dir)
+    for name in scene_names(args):
+        rec_dir = render(name, args.out)
         by_limb, countable, false = misses_of(
             rec_dir, args.max_frames, args.radius_px, config, args.approach
         )
@@ -258,9 +254,9 @@ def main(argv: list[str] | None = None) -> int:
         n = sum(countable.values())
         cells = " | ".join(f"{causes[c] / max(n, 1):.3f}" for c in CAUSES)
         missed = sum(causes.values()) / max(n, 1)
-        print(f"| {path.stem} | {n} | {false:.2f} | {missed:.3f} | {cells} |", flush=True)
+        print(f"| {name} | {n} | {false:.2f} | {missed:.3f} | {cells} |", flush=True)
         if args.by_limb:
-            limb_tables[path.stem] = (by_limb, countable)
+            limb_tables[name] = (by_limb, countable)
     for name, (by_limb, countable) in limb_tables.items():
         print(f"\n{name}, per limb:\n")
         print("| limb | limb-frames | missed | " + " | ".join(CAUSES) + " |")

@@ -26,12 +26,12 @@ from pathlib import Path
 import cv2
 import numpy as np
 from front_end import observe_recording
+from pipeline_bench import add_scene_arguments, render, scene_names
 
 from surveil.io.ground_truth import MaskClass, load_ground_truth
 from surveil.io.recording import open_recording
 from surveil.pipeline import PipelineConfig, load_pipeline_config
 from surveil.recon.candidates import make_candidates
-from surveil.synth.scene import synthesise
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -94,7 +94,7 @@ def bench_recording(
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("names", nargs="*")
+    add_scene_arguments(parser)
     parser.add_argument("--out", type=Path, default=ROOT / "out" / "bench_synth")
     parser.add_argument("--max-frames", type=int, default=None)
     parser.add_argument(
@@ -102,20 +102,16 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = parser.parse_args(argv)
     cfg = load_pipeline_config(args.config)
-    paths = [ROOT / "recordings" / f"{n}.toml" for n in args.names] or sorted(
-        (ROOT / "recordings").glob("*.toml")
-    )
     print(
         "| scenario | recall 50 mm | recall 100 mm | false / set | true limbs / set "
         "| mean dist mm | skin P | skin R | bg ms | skin ms | blobs ms | cand ms |"
     )
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
-    for path in paths:
-        rec_dir = args.out / path.stem
-        synthesise(path, rec_dir)
+    for name in scene_names(args):
+        rec_dir = render(name, args.out)
         r = bench_recording(rec_dir, args.max_frames, cfg)
         print(
-            f"| {path.stem} | {r['recall50']:.3f} | {r['recall100']:.3f} "
+            f"| {name} | {r['recall50']:.3f} | {r['recall100']:.3f} "
             f"| {r['false_per_set']:.2f} | {r['limbs_per_set']:.2f} | {r['mean_mm']:.0f} "
             f"| {r['skin_precision']:.3f} | {r['skin_recall']:.3f} "
             f"| {r['background_ms']:.2f} | {r['skin_ms']:.2f} | {r['blobs_ms']:.2f} "

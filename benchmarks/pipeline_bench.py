@@ -79,12 +79,19 @@ def scenario_of(name: str) -> tuple[Path, int | None]:
     return path, int(seed)
 
 
-def bench(
-    name: str, out_dir: Path, seed: int, config: Path | None = None
-) -> tuple[object, object, float]:
+def render(name: str, out_dir: Path) -> Path:
+    """Render scene ``name`` (:func:`scenario_of`) into ``out_dir / name`` unless it is
+    there and up to date; returns that recording directory."""
     rec_dir = out_dir / name
     scenario, scene_seed = scenario_of(name)
     synthesise(scenario, rec_dir, scene_seed=scene_seed)
+    return rec_dir
+
+
+def bench(
+    name: str, out_dir: Path, seed: int, config: Path | None = None
+) -> tuple[object, object, float]:
+    rec_dir = render(name, out_dir)
     use_one_opencv_thread()  # as `surveil run`
     rec = open_recording(rec_dir)
     mcap = output_path(out_dir, name, config, seed)

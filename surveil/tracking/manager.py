@@ -139,6 +139,8 @@ class _Track:
     speed_ema_mps: float = 0.0
     support_ema: float = 0.0  # smoothed likelihood level (a ghost's is lower: fewer views)
     contest_ns: int | None = None  # since when it out-supports a hand holding a slot
+    third_hand_ns: int | None = None  # since when it is a third hand beside an own-hands pair
+    split_by_side: bool = False  # its combined pair separates onto the modes' body sides
     partner: int | None = None
     joined_ns: int | None = None  # when it entered its current combined state
     joined_m: np.ndarray | None = None  # its estimate then
@@ -299,6 +301,7 @@ class MultiTargetTracker:
         used = set(reacquired.values())  # seeds taken: no tracker starts on them
         used |= self._split_on_seeds(seeds, used)
         used |= self._split_out_of_reach(seeds, used)
+        self._split_on_third_hand(t_ns)
         rel_v = self._candidate_rel_v(candidates, observations)
         self._label(pts, rel_v, t_ns, observations or {}, set(reacquired) | set(merged))
         transitions = self._advance_phases(t_ns, pairs, drifted, reacquired, merged)
@@ -843,6 +846,83 @@ class MultiTargetTracker:
                 left_m,
             )
         return out
+
+    def _split_on_third_hand(self, t_ns: int) -> None:
+        """Part a combined pair of one person's two hands onto a third hand of that person.
+
+        A ghost beside a hand (two views' lines of sight of different limbs crossing near the
+        body) can take a hand slot before the real hand's tracker is confirmed; when the
+        ghost's candidate goes, its tracker slides onto the neighbouring hand and the two
+        combine. The real hand is then followed by an unlabelled tracker that no slot is
+        free for, and the pair never finds a second mode, since that tracker claims the
+        hand's candidates (handshake, scene seed 102: p2's two labels sat on his left hand
+        from his first second in view, and both handshakes went to "one tracker"). So an
+        unlabelled hand tracker that is clearly the pair's person's
+        (:func:`lab.nearest_person`), tracked since before the pair joined, out of every
+        other person's reach, at least ``separate_distance_m`` from the pair and at most
+        ``contest_margin`` less supported than it (``support_ema``; a ghost beside clasped
+        hands is seen by fewer views) for ``own_pair_third_hand_s`` becomes the
+        pair's second mode: the pair separates as one that never met (the activity stage
+        drops its episode), each tracker to the mode on its side of the body, and the
+        unlabelled tracker, now a duplicate, is retired."""
+        wait_s = self.cfg.lifecycle.own_pair_third_hand_s
+        lcfg = self.cfg.labelling
+        own = {
+            a.person: (a, b)
+            for a, b in self._combined_pairs()
+            if a.is_hand and b.is_hand and a.person == b.person > 0
+        }
+        persons, heads = self._live_heads()
+        for c in list(self._tracks.values()):
+            if not (
+                wait_s > 0
+                and own
+                and c.is_hand
+                and c.person == 0
+                and c.phase is Phase.UNLABELLED
+                and not c.demoted
+            ):
+                c.third_hand_ns = None
+                continue
+            k = lab.nearest_person(c.mean_m, heads, np.zeros(len(persons), int), lcfg)
+            pair = own.get(persons[k].number) if k >= 0 else None
+            if pair is None or not self._third_hand(c, *pair, np.delete(heads, k, axis=0)):
+                c.third_hand_ns = None
+                continue
+            c.third_hand_ns, due = _persisted(c.third_hand_ns, t_ns, wait_s)
+            if not due:
+                continue
+            a, b = pair
+            lc = self.cfg.lifecycle
+            split = np.array([a.mean_m, c.mean_m])
+            vel = np.array([a.vel_mps, c.vel_mps])
+            for t in (a, b):
+                t.split_m, t.split_vel_mps = split, vel
+                t.apart_frames = t.unjoin_frames = lc.separate_frames
+                t.split_gain_m = np.inf
+                t.split_by_side = True
+            log.debug("t%d / t%d part on t%d, a third hand of p%d", a.id, b.id, c.id, a.person)
+            del own[a.person]
+            self._remove(c.id)
+
+    def _third_hand(self, c: _Track, a: _Track, b: _Track, other_heads: np.ndarray) -> bool:
+        """Whether ``c`` stands apart from the combined pair ``a``/``b``, is about as well
+        supported, is out of every other person's reach (``other_heads``; a hand held
+        out to the pair's person, in a handshake, is not a third hand of theirs), and was
+        tracked already when the pair joined: then the pair's two trackers and ``c``
+        followed three targets, and one of the pair's was no hand. A tracker started after
+        the join may be a hand leaving the pair (:meth:`_split_on_seeds` parts it) or a
+        ghost beside it (three_people, take 102: one 44 cm from p1's head while his hands
+        were together at a handshake) (:meth:`_split_on_third_hand`)."""
+        lcfg = self.cfg.labelling
+        reach = np.linalg.norm(other_heads - c.mean_m, axis=1).min(initial=np.inf)
+        return bool(
+            a.joined_ns is not None
+            and c.born_ns <= a.joined_ns
+            and np.linalg.norm(c.mean_m - a.mean_m) >= self.cfg.lifecycle.separate_distance_m
+            and c.support_ema >= max(a.support_ema, b.support_ema) - lcfg.contest_margin
+            and reach > lcfg.arm_reach_m
+        )
 
     def _seed_of_left_hand(
         self,
@@ -1702,6 +1782,7 @@ class MultiTargetTracker:
                 tr.before_vec_m = None
                 tr.apart_frames = 0
                 tr.split_m = tr.split_vel_mps = None
+                tr.split_by_side = False
             if new is Phase.LOST:
                 tr.lost_since_ns = t_ns
                 tr.mean_m = tr.last_good_m.copy()
@@ -1766,7 +1847,11 @@ class MultiTargetTracker:
             if met and heads is not None and margin > 0
             else None
         )
-        if not met:
+        sides = self._mode_sides(a, b, modes) if a.split_by_side else None
+        if sides is not None:
+            mode_a, mode_b = sides
+            log.debug("t%d / t%d never met: apart by their body sides", a.id, b.id)
+        elif not met:
             (mode_a, mode_b), _ = self._modes_by_place(a, b, modes)
             log.debug("t%d / t%d never met: apart where they were at the join", a.id, b.id)
         elif by_owner is not None:
@@ -1777,6 +1862,20 @@ class MultiTargetTracker:
             log.debug("t%d / t%d separate, angle %.0f deg", a.id, b.id, np.degrees(angle))
         self._reinit(a, modes[mode_a], vel[mode_a])
         self._reinit(b, modes[mode_b], vel[mode_b])
+
+    def _mode_sides(self, a: _Track, b: _Track, modes: np.ndarray) -> tuple[int, int] | None:
+        """The modes of a person's left and right hands ``a`` and ``b``: the one farther to the
+        person's left (:func:`lab.decide_left_right`) for the left hand; None unless the two
+        are that person's two sided hands and its head is known."""
+        head = self._head_m(a.person)
+        sided = {a.limb, b.limb} == {Limb.LEFT_HAND, Limb.RIGHT_HAND}
+        if head is None or a.person != b.person or not sided:
+            return None
+        p = self._persons[a.person]
+        limbs = lab.decide_left_right(modes, head, self._facing(p, head))
+        if limbs[0] == limbs[1]:
+            return None
+        return (0, 1) if limbs[0] == a.limb else (1, 0)
 
     def _reinit(self, tr: _Track, position_m: np.ndarray, velocity_mps: np.ndarray) -> None:
         """Draw the tracker's particles around a position (new or re-acquired target)."""

@@ -127,6 +127,14 @@ class LifecycleConfig:
         "stray candidate near joined hands must not part them), m",
         min=0.0,
     )
+    own_pair_third_hand_s: float = setting(
+        0.5,
+        "a combined pair of one person's two hands separates onto an unlabelled hand tracker "
+        "of that person that has been this long at least separate_distance_m from the pair "
+        "and about as well supported (within labelling.contest_margin): the person has a "
+        "third hand, so the pair was a hand and a ghost (0 = never), s",
+        min=0.0,
+    )
     pair_seed_gate_m: float = setting(
         0.6,
         "a new candidate that appeared this close to a combined pair (and is at least "

@@ -1464,3 +1464,49 @@ def test_a_steady_stray_for_fewer_than_separate_far_frames_does_not_part_a_pair(
 
     assert min(splits(3)) > max(joined)  # parted only when the hands themselves part
     assert min(splits(4)) <= max(joined)
+
+
+def _ghost_joins_the_left_hand(rng):
+    """A person (head, left hand) with a strong ghost (prior 0.95, seen by as many views as a
+    hand) 20 cm right of the left hand for 30 frame sets, while the right hand is hidden:
+    the ghost takes the right hand's slot. The right hand then shows (0.95), 30 cm right of
+    the ghost, and gets a tracker with no slot free; after 10 frame sets the ghost slides
+    onto the left hand over four and stays in it (one candidate). Returns (body, candidate
+    sets)."""
+    a = body((2.0, 2.0), 0.0)
+    ghost = a["left_hand"] - 0.2 * a["left"]
+    sets = [_noisy_set(rng, [a["head"], a["left_hand"], ghost], [0.95] * 3) for _ in range(30)]
+    seen = [a["head"], a["left_hand"], a["right_hand"]]
+    sets += [_noisy_set(rng, [*seen, ghost], [0.95] * 4) for _ in range(10)]
+    for u in (0.25, 0.5, 0.75, 1.0):
+        slid = merged([*seen, ghost * (1 - u) + a["left_hand"] * u])
+        sets.append(_noisy_set(rng, slid, [0.95] * len(slid)))
+    sets += [_noisy_set(rng, seen, [0.95] * 3) for _ in range(40)]
+    return a, sets
+
+
+@pytest.mark.parametrize("wait_s", [0.5, 0.0])
+def test_a_pair_of_one_persons_hands_parts_onto_a_third_hand(rig, wait_s):
+    """The ghost's tracker, holding the right hand's slot, combines with the left hand when it
+    slides in; the real right hand then gets a tracker that no slot is free for. Seen as
+    well as the pair, 30 cm from it, it is a third hand of the person: after
+    ``own_pair_third_hand_s`` the pair parts onto it, each label on its own side, as a pair
+    that never met, and the third tracker is retired. With 0 (never) both labels stay on
+    the left hand."""
+    a, sets = _ghost_joins_the_left_hand(np.random.default_rng(7))
+    cfg = TrackingConfig(lifecycle=LifecycleConfig(own_pair_third_hand_s=wait_s))
+    trk = MultiTargetTracker(cfg, rig, seed=16)
+    out = [trk.step(i * DT_NS, c) for i, c in enumerate(sets)]
+    assert _owner_of(out[39], a["left_hand"]) == "p1/left_hand"
+    joined = [t for f in out[40:50] for t in f.transitions if t.new is Phase.COMBINED]
+    assert {t.label for t in joined} == {"p1/left_hand", "p1/right_hand"}
+    final = {s.label: s for s in out[-1].targets}
+    if wait_s > 0:
+        parted = [t for f in out[50:] for t in f.transitions if t.old is Phase.COMBINED]
+        assert len(parted) == 2 and not any(t.met for t in parted)
+        assert _owner_of(out[-1], a["left_hand"]) == "p1/left_hand"
+        assert _owner_of(out[-1], a["right_hand"]) == "p1/right_hand"
+        assert final["p1/left_hand"].phase is final["p1/right_hand"].phase is Phase.NORMAL
+    else:
+        assert final["p1/left_hand"].phase is Phase.COMBINED
+        assert not _owner_of(out[-1], a["right_hand"]).startswith("p1/")
