@@ -140,7 +140,8 @@ class _Track:
     support_ema: float = 0.0  # smoothed likelihood level (a ghost's is lower: fewer views)
     contest_ns: int | None = None  # since when it out-supports a hand holding a slot
     third_hand_ns: int | None = None  # since when it is a third hand beside an own-hands pair
-    split_by_side: bool = False  # its combined pair separates onto the modes' body sides
+    home_hand_ns: int | None = None  # since when it is an owner's hand gone home from a pair
+    split_fixed: int | None = None  # the mode (of split_m) it takes when its pair separates
     partner: int | None = None
     joined_ns: int | None = None  # when it entered its current combined state
     joined_m: np.ndarray | None = None  # its estimate then
@@ -302,6 +303,7 @@ class MultiTargetTracker:
         used |= self._split_on_seeds(seeds, used)
         used |= self._split_out_of_reach(seeds, used)
         self._split_on_third_hand(t_ns)
+        self._split_on_home_hand(t_ns)
         rel_v = self._candidate_rel_v(candidates, observations)
         self._label(pts, rel_v, t_ns, observations or {}, set(reacquired) | set(merged))
         transitions = self._advance_phases(t_ns, pairs, drifted, reacquired, merged)
@@ -833,11 +835,14 @@ class MultiTargetTracker:
                     out.add(k)
             split = np.array([tr.mean_m, left_m])
             vel = np.array([tr.vel_mps, left_vel])
-            for t in (tr, other):
+            # the owner who cannot reach the pair's estimate has the hand left behind
+            fixed = (1, 0) if beyond[0] else (0, 1)
+            for t, mode in zip((tr, other), fixed, strict=True):
                 t.split_m, t.split_vel_mps = split, vel
                 t.apart_frames = lc.separate_frames
                 t.split_gain_m = np.inf
                 t.out_of_reach_frames = 0
+                t.split_fixed = mode if beyond.sum() == 1 else None
             log.debug(
                 "t%d / t%d part: %.2f m from a head, out of reach; the other hand at %s",
                 tr.id,
@@ -896,11 +901,12 @@ class MultiTargetTracker:
             lc = self.cfg.lifecycle
             split = np.array([a.mean_m, c.mean_m])
             vel = np.array([a.vel_mps, c.vel_mps])
-            for t in (a, b):
+            sides = self._mode_sides(a, b, split)
+            for t, mode in zip((a, b), sides or (None, None), strict=True):
                 t.split_m, t.split_vel_mps = split, vel
                 t.apart_frames = t.unjoin_frames = lc.separate_frames
                 t.split_gain_m = np.inf
-                t.split_by_side = True
+                t.split_fixed = mode
             log.debug("t%d / t%d part on t%d, a third hand of p%d", a.id, b.id, c.id, a.person)
             del own[a.person]
             self._remove(c.id)
@@ -921,6 +927,85 @@ class MultiTargetTracker:
             and c.born_ns <= a.joined_ns
             and np.linalg.norm(c.mean_m - a.mean_m) >= self.cfg.lifecycle.separate_distance_m
             and c.support_ema >= max(a.support_ema, b.support_ema) - lcfg.contest_margin
+            and reach > lcfg.arm_reach_m
+        )
+
+    def _split_on_home_hand(self, t_ns: int) -> None:
+        """Part a combined pair of two people's hands onto one owner's hand that went home.
+
+        After a handover the giver's hand can leave faster than the pair's modes follow
+        and be seen again only at the giver's side, beyond ``pair_seed_gate_m``, where its
+        seed starts a new tracker (held-out exchange take 101, seed 0: 0.6-0.7 m from the
+        pair, which followed the taker's hand; the pair later parted onto a ghost and the
+        giver's label read the ball). An unlabelled hand tracker started after the join
+        that is clearly owner P's (:func:`lab.nearest_person`), while P's other hand is
+        tracked elsewhere (normal, ``separate_distance_m`` or more from it), is P's hand
+        from the pair or a ghost. Out of every other person's reach (a ghost on P's chest
+        beside clasped hands is within the other owner's), ``separate_distance_m`` or more
+        from the pair and at most ``contest_margin`` less supported than it for
+        ``home_hand_s``, it is the hand: the pair separates, P's tracker on it and the
+        other owner's on the pair's estimate, and it is retired as a duplicate."""
+        wait_s = self.cfg.lifecycle.home_hand_s
+        members: dict[int, tuple[_Track, _Track]] = {}  # owner -> (its hand, the other)
+        for a, b in self._combined_pairs():
+            if a.is_hand and b.is_hand and a.person != b.person and 0 not in (a.person, b.person):
+                members[a.person], members[b.person] = (a, b), (b, a)
+        persons, heads = self._live_heads()
+        lcfg = self.cfg.labelling
+        for c in list(self._tracks.values()):
+            if not (
+                wait_s > 0
+                and members
+                and c.is_hand
+                and c.person == 0
+                and c.phase is Phase.UNLABELLED
+                and not c.demoted
+            ):
+                c.home_hand_ns = None
+                continue
+            k = lab.nearest_person(c.mean_m, heads, np.zeros(len(persons), int), lcfg)
+            entry = members.get(persons[k].number) if k >= 0 else None
+            if entry is None or not self._home_hand(
+                c, *entry, persons[k], np.delete(heads, k, axis=0)
+            ):
+                c.home_hand_ns = None
+                continue
+            c.home_hand_ns, due = _persisted(c.home_hand_ns, t_ns, wait_s)
+            if not due:
+                continue
+            mine, other = entry
+            lc = self.cfg.lifecycle
+            split = np.array([other.mean_m, c.mean_m])
+            vel = np.array([other.vel_mps, c.vel_mps])
+            for t, mode in ((other, 0), (mine, 1)):
+                t.split_m, t.split_vel_mps = split, vel
+                t.apart_frames = lc.separate_frames
+                t.split_gain_m = np.inf
+                t.split_fixed = mode
+            log.debug(
+                "t%d / t%d part on t%d, p%d's hand gone home", mine.id, other.id, c.id, mine.person
+            )
+            for p in (mine.person, other.person):
+                members.pop(p, None)
+            self._remove(c.id)
+
+    def _home_hand(
+        self, c: _Track, mine: _Track, other: _Track, p: _Person, other_heads: np.ndarray
+    ) -> bool:
+        """Whether ``c`` is owner ``p``'s hand gone home from the pair ``mine``/``other``
+        (:meth:`_split_on_home_hand`)."""
+        lc, lcfg = self.cfg.lifecycle, self.cfg.labelling
+        rest = [self._tracks.get(h) for h in p.hand_ids if h != mine.id]
+        reach = np.linalg.norm(other_heads - c.mean_m, axis=1).min(initial=np.inf)
+        return bool(
+            mine.joined_ns is not None
+            and c.born_ns > mine.joined_ns
+            and len(rest) == 1
+            and rest[0] is not None
+            and rest[0].phase is Phase.NORMAL
+            and np.linalg.norm(rest[0].mean_m - c.mean_m) >= lc.separate_distance_m
+            and np.linalg.norm(c.mean_m - mine.mean_m) >= lc.separate_distance_m
+            and c.support_ema >= max(mine.support_ema, other.support_ema) - lcfg.contest_margin
             and reach > lcfg.arm_reach_m
         )
 
@@ -1782,7 +1867,7 @@ class MultiTargetTracker:
                 tr.before_vec_m = None
                 tr.apart_frames = 0
                 tr.split_m = tr.split_vel_mps = None
-                tr.split_by_side = False
+                tr.split_fixed = None
             if new is Phase.LOST:
                 tr.lost_since_ns = t_ns
                 tr.mean_m = tr.last_good_m.copy()
@@ -1847,10 +1932,9 @@ class MultiTargetTracker:
             if met and heads is not None and margin > 0
             else None
         )
-        sides = self._mode_sides(a, b, modes) if a.split_by_side else None
-        if sides is not None:
-            mode_a, mode_b = sides
-            log.debug("t%d / t%d never met: apart by their body sides", a.id, b.id)
+        if a.split_fixed is not None and b.split_fixed is not None:
+            mode_a, mode_b = a.split_fixed, b.split_fixed
+            log.debug("t%d / t%d separate as their parting decided", a.id, b.id)
         elif not met:
             (mode_a, mode_b), _ = self._modes_by_place(a, b, modes)
             log.debug("t%d / t%d never met: apart where they were at the join", a.id, b.id)

@@ -1510,3 +1510,76 @@ def test_a_pair_of_one_persons_hands_parts_onto_a_third_hand(rig, wait_s):
     else:
         assert final["p1/left_hand"].phase is Phase.COMBINED
         assert not _owner_of(out[-1], a["right_hand"]).startswith("p1/")
+
+
+def test_a_pair_out_of_one_owners_reach_gives_the_estimate_to_the_other_owner(rig, rng):
+    """a's and b's right hands come side by side in front of them and close in along y to
+    shake; the pair then follows b's hand home while a's hand goes unseen, and a candidate
+    shows by b's chest, just within a's reach (a ghost, or a's hand held out). Out of a's
+    reach, the pair's estimate is b's hand and the candidate is where a's hand may be: the
+    pair parts so. The owner rule cannot tell (the candidate is nearer b's head, the
+    estimate nearer b's too: 0.09 m between the two ways), and the angle rule, reading the
+    sideways approach, gave b's label to the candidate and a's to b's hand."""
+    a, b = body((2.0, 2.0), 0.0), body((3.0, 2.0), 180.0)
+    rest = _head_and_left
+    meet = np.array([2.5, 2.0, 1.05])
+    side_a, side_b = np.array([2.5, 1.7, 1.05]), np.array([2.5, 2.3, 1.05])
+    frames = [[*rest(a), a["right_hand"], *rest(b), b["right_hand"]] for _ in range(45)]
+    for u in np.linspace(0, 1, 7)[1:]:
+        ra = a["right_hand"] + u * (side_a - a["right_hand"])
+        frames.append([*rest(a), *rest(b), ra, b["right_hand"] + u * (side_b - b["right_hand"])])
+    for u in np.linspace(0, 1, 5)[1:]:
+        frames.append(
+            [
+                *rest(a),
+                *rest(b),
+                *merged([side_a + u * (meet - side_a), side_b + u * (meet - side_b)]),
+            ]
+        )
+    frames += [[*rest(a), *rest(b), meet] for _ in range(6)]
+    home_b = [meet + u * (b["right_hand"] - meet) for u in np.linspace(0, 1, 7)[1:]]
+    spot = np.array([2.75, 2.35, 1.35])
+    frames += [
+        [*rest(a), *rest(b), rb] + ([spot] if k >= 5 else [])
+        for k, rb in enumerate(home_b + [home_b[-1]] * 20)
+    ]
+    out = run(MultiTargetTracker(TrackingConfig(), rig, seed=11), frames, rng)
+    heads = {s.person: s.mean_m for s in out[-1].targets if s.label.endswith("/head")}
+    pa = min(heads, key=lambda k: np.linalg.norm(heads[k] - a["head"]))
+    pb = min(heads, key=lambda k: np.linalg.norm(heads[k] - b["head"]))
+    assert _owner_of(out[-1], b["right_hand"]) == f"p{pb}/right_hand"
+    assert _owner_of(out[-1], spot) == f"p{pa}/right_hand"
+
+
+@pytest.mark.parametrize("wait_s", [0.05, 0.0])
+def test_a_hand_seen_again_only_at_home_parts_the_pair_it_left(rig, rng, wait_s):
+    """a (x 1.9) and b (x 3.1) shake right hands; b's hand then leaves unseen and shows again
+    at b's side, 0.7 m from the pair, beyond ``pair_seed_gate_m``: a new tracker starts on it
+    while the pair holds a's hand. It is clearly b's, b's left hand is tracked elsewhere,
+    and a cannot reach it: it is b's hand gone home, and after ``home_hand_s`` the pair
+    parts onto it, b's label there, a's on a's hand, as a pair that met. With 0 (never)
+    b's label stays with a's hand in the pair."""
+    a, b = body((1.9, 2.0), 0.0), body((3.1, 2.0), 180.0)
+    rest = _head_and_left
+    meet = np.array([2.5, 2.0, 1.05])
+    frames = [[*rest(a), a["right_hand"], *rest(b), b["right_hand"]] for _ in range(45)]
+    for u in np.linspace(0, 1, 9)[1:]:
+        ra = a["right_hand"] + u * (meet - a["right_hand"])
+        rb = b["right_hand"] + u * (meet - b["right_hand"])
+        frames.append([*rest(a), *rest(b), *merged([ra, rb])])
+    frames += [[*rest(a), *rest(b), meet] for _ in range(10)]
+    frames += [[*rest(a), *rest(b), meet] for _ in range(3)]  # b's hand leaves unseen
+    frames += [[*rest(a), *rest(b), meet, b["right_hand"]] for _ in range(15)]
+    cfg = TrackingConfig(lifecycle=LifecycleConfig(home_hand_s=wait_s))
+    out = run(MultiTargetTracker(cfg, rig, seed=11), frames, rng)
+    heads = {s.person: s.mean_m for s in out[-1].targets if s.label.endswith("/head")}
+    pa = min(heads, key=lambda k: np.linalg.norm(heads[k] - a["head"]))
+    pb = min(heads, key=lambda k: np.linalg.norm(heads[k] - b["head"]))
+    parted = [t for f in out for t in f.transitions if t.old is Phase.COMBINED]
+    if wait_s > 0:
+        assert len(parted) == 2 and all(t.met for t in parted)
+        assert _owner_of(out[-1], b["right_hand"]) == f"p{pb}/right_hand"
+        assert _owner_of(out[-1], meet) == f"p{pa}/right_hand"
+    else:
+        assert not parted
+        assert not _owner_of(out[-1], b["right_hand"]).startswith(f"p{pb}/")
