@@ -940,8 +940,9 @@ class MultiTargetTracker:
         giver's label read the ball). An unlabelled hand tracker started after the join
         that is clearly owner P's (:func:`lab.nearest_person`), while P's other hand is
         tracked elsewhere (normal, ``separate_distance_m`` or more from it), is P's hand
-        from the pair or a ghost. Out of every other person's reach (a ghost on P's chest
-        beside clasped hands is within the other owner's), ``separate_distance_m`` or more
+        from the pair or a ghost. Farther than ``arm_reach_m`` + ``person_margin_m`` from
+        every other person's head (a ghost on P's chest beside clasped hands is about 1 m
+        from the other owner's; a hand hanging at P's side 1.2 m), ``separate_distance_m`` or more
         from the pair and at most ``contest_margin`` less supported than it for
         ``home_hand_s``, it is the hand: the pair separates, P's tracker on it and the
         other owner's on the pair's estimate, and it is retired as a duplicate."""
@@ -1006,7 +1007,7 @@ class MultiTargetTracker:
             and np.linalg.norm(rest[0].mean_m - c.mean_m) >= lc.separate_distance_m
             and np.linalg.norm(c.mean_m - mine.mean_m) >= lc.separate_distance_m
             and c.support_ema >= max(mine.support_ema, other.support_ema) - lcfg.contest_margin
-            and reach > lcfg.arm_reach_m
+            and reach > lcfg.arm_reach_m + lcfg.person_margin_m
         )
 
     def _seed_of_left_hand(
