@@ -871,29 +871,18 @@ class MultiTargetTracker:
         drops its episode), each tracker to the mode on its side of the body, and the
         unlabelled tracker, now a duplicate, is retired."""
         wait_s = self.cfg.lifecycle.own_pair_third_hand_s
-        lcfg = self.cfg.labelling
         own = {
             a.person: (a, b)
             for a, b in self._combined_pairs()
             if a.is_hand and b.is_hand and a.person == b.person > 0
         }
         persons, heads = self._live_heads()
-        for c in list(self._tracks.values()):
-            if not (
-                wait_s > 0
-                and own
-                and c.is_hand
-                and c.person == 0
-                and c.phase is Phase.UNLABELLED
-                and not c.demoted
-            ):
-                c.third_hand_ns = None
-                continue
-            k = lab.nearest_person(c.mean_m, heads, np.zeros(len(persons), int), lcfg)
+        waiting: set[int] = set()
+        for c, k in self._free_hands(persons, heads) if wait_s > 0 and own else []:
             pair = own.get(persons[k].number) if k >= 0 else None
             if pair is None or not self._third_hand(c, *pair, np.delete(heads, k, axis=0)):
-                c.third_hand_ns = None
                 continue
+            waiting.add(c.id)
             c.third_hand_ns, due = _persisted(c.third_hand_ns, t_ns, wait_s)
             if not due:
                 continue
@@ -910,6 +899,22 @@ class MultiTargetTracker:
             log.debug("t%d / t%d part on t%d, a third hand of p%d", a.id, b.id, c.id, a.person)
             del own[a.person]
             self._remove(c.id)
+        for tr in self._tracks.values():
+            if tr.id not in waiting:
+                tr.third_hand_ns = None
+
+    def _free_hands(self, persons: list[_Person], heads: np.ndarray) -> list[tuple[_Track, int]]:
+        """Unlabelled hand trackers that have not lost a slot contest, each with the index in
+        ``persons`` of the person it clearly belongs to (:func:`lab.nearest_person`; -1
+        none)."""
+        lcfg = self.cfg.labelling
+        free = [
+            c
+            for c in self._tracks.values()
+            if c.is_hand and c.person == 0 and c.phase is Phase.UNLABELLED and not c.demoted
+        ]
+        none = np.zeros(len(persons), int)
+        return [(c, lab.nearest_person(c.mean_m, heads, none, lcfg)) for c in free]
 
     def _third_hand(self, c: _Track, a: _Track, b: _Track, other_heads: np.ndarray) -> bool:
         """Whether ``c`` stands apart from the combined pair ``a``/``b``, is about as well
@@ -952,25 +957,14 @@ class MultiTargetTracker:
             if a.is_hand and b.is_hand and a.person != b.person and 0 not in (a.person, b.person):
                 members[a.person], members[b.person] = (a, b), (b, a)
         persons, heads = self._live_heads()
-        lcfg = self.cfg.labelling
-        for c in list(self._tracks.values()):
-            if not (
-                wait_s > 0
-                and members
-                and c.is_hand
-                and c.person == 0
-                and c.phase is Phase.UNLABELLED
-                and not c.demoted
-            ):
-                c.home_hand_ns = None
-                continue
-            k = lab.nearest_person(c.mean_m, heads, np.zeros(len(persons), int), lcfg)
+        waiting: set[int] = set()
+        for c, k in self._free_hands(persons, heads) if wait_s > 0 and members else []:
             entry = members.get(persons[k].number) if k >= 0 else None
             if entry is None or not self._home_hand(
                 c, *entry, persons[k], np.delete(heads, k, axis=0)
             ):
-                c.home_hand_ns = None
                 continue
+            waiting.add(c.id)
             c.home_hand_ns, due = _persisted(c.home_hand_ns, t_ns, wait_s)
             if not due:
                 continue
@@ -989,6 +983,9 @@ class MultiTargetTracker:
             for p in (mine.person, other.person):
                 members.pop(p, None)
             self._remove(c.id)
+        for tr in self._tracks.values():
+            if tr.id not in waiting:
+                tr.home_hand_ns = None
 
     def _home_hand(
         self, c: _Track, mine: _Track, other: _Track, p: _Person, other_heads: np.ndarray
