@@ -140,6 +140,7 @@ class _Track:
     support_ema: float = 0.0  # smoothed likelihood level (a ghost's is lower: fewer views)
     contest_ns: int | None = None  # since when it out-supports a hand holding a slot
     third_hand_ns: int | None = None  # since when it is a third hand beside an own-hands pair
+    home_hand_ns: int | None = None  # since when it is an owner's hand gone home from a pair
     split_fixed: int | None = None  # the mode (of split_m) it takes when its pair separates
     partner: int | None = None
     joined_ns: int | None = None  # when it entered its current combined state
@@ -301,8 +302,8 @@ class MultiTargetTracker:
         used = set(reacquired.values())  # seeds taken: no tracker starts on them
         used |= self._split_on_seeds(seeds, used)
         used |= self._split_out_of_reach(seeds, used)
-        used |= self._split_on_home_seed(seeds, used)
         self._split_on_third_hand(t_ns)
+        self._split_on_home_hand(t_ns)
         rel_v = self._candidate_rel_v(candidates, observations)
         self._label(pts, rel_v, t_ns, observations or {}, set(reacquired) | set(merged))
         transitions = self._advance_phases(t_ns, pairs, drifted, reacquired, merged)
@@ -934,72 +935,75 @@ class MultiTargetTracker:
             and reach > lcfg.arm_reach_m
         )
 
-    def _split_on_home_seed(self, seeds: list[_Pending], used: set[int]) -> set[int]:
-        """Part combined pairs of two people's hands onto one owner's hand seen again at home;
-        returns the seeds used.
+    def _split_on_home_hand(self, t_ns: int) -> None:
+        """Part a combined pair of two people's hands onto one owner's hand that went home.
 
         After a handover the giver's hand can leave faster than the pair's modes follow
         and be seen again only at the giver's side, beyond ``pair_seed_gate_m``, where its
-        seed would start a new tracker (held-out exchange take 101, seed 0: 0.6-0.7 m from
-        the pair, which followed the taker's hand; the pair later parted onto a ghost and
-        the giver's label read the ball). A confirmed seed that first appeared after the
-        join and is clearly owner P's (:func:`lab.nearest_person`), while P's other hand is
+        seed starts a new tracker (held-out exchange take 101, seed 0: 0.6-0.7 m from the
+        pair, which followed the taker's hand; the pair later parted onto a ghost and the
+        giver's label read the ball). An unlabelled hand tracker started after the join
+        that is clearly owner P's (:func:`lab.nearest_person`), while P's other hand is
         tracked elsewhere (normal, ``separate_distance_m`` or more from it), is P's hand
         from the pair or a ghost. Farther than ``arm_reach_m`` + ``person_margin_m`` from
         every other person's head (a ghost on P's chest beside clasped hands is about 1 m
-        from the other owner's; a hand hanging at P's side 1.2 m) and
-        ``separate_distance_m`` or more from the pair, it is the hand: the pair separates,
-        P's tracker on the seed and the other owner's on the pair's estimate."""
-        lc = self.cfg.lifecycle
-        out: set[int] = set()
-        if not lc.home_seed:
-            return out
+        from the other owner's; a hand hanging at P's side 1.2 m), ``separate_distance_m`` or more
+        from the pair and at most ``contest_margin`` less supported than it for
+        ``home_hand_s``, it is the hand: the pair separates, P's tracker on it and the
+        other owner's on the pair's estimate, and it is retired as a duplicate."""
+        wait_s = self.cfg.lifecycle.home_hand_s
         members: dict[int, tuple[_Track, _Track]] = {}  # owner -> (its hand, the other)
         for a, b in self._combined_pairs():
             if a.is_hand and b.is_hand and a.person != b.person and 0 not in (a.person, b.person):
                 members[a.person], members[b.person] = (a, b), (b, a)
         persons, heads = self._live_heads()
-        lcfg = self.cfg.labelling
-        for i, seed in enumerate(seeds):
-            if not members or i in used or seed.count < lc.init_confirm_frames:
-                continue
-            n_hands = np.zeros(len(persons), int)
-            k = lab.nearest_person(seed.position_m, heads, n_hands, lcfg)
+        waiting: set[int] = set()
+        for c, k in self._free_hands(persons, heads) if wait_s > 0 and members else []:
             entry = members.get(persons[k].number) if k >= 0 else None
-            if entry is None or not self._home_seed(
-                seed, *entry, persons[k], np.delete(heads, k, axis=0)
+            if entry is None or not self._home_hand(
+                c, *entry, persons[k], np.delete(heads, k, axis=0)
             ):
                 continue
+            waiting.add(c.id)
+            c.home_hand_ns, due = _persisted(c.home_hand_ns, t_ns, wait_s)
+            if not due:
+                continue
             mine, other = entry
-            split = np.array([other.mean_m, seed.position_m])
-            vel = np.array([other.vel_mps, seed.velocity_mps])
+            lc = self.cfg.lifecycle
+            split = np.array([other.mean_m, c.mean_m])
+            vel = np.array([other.vel_mps, c.vel_mps])
             for t, mode in ((other, 0), (mine, 1)):
                 t.split_m, t.split_vel_mps = split, vel
                 t.apart_frames = lc.separate_frames
                 t.split_gain_m = np.inf
                 t.split_fixed = mode
-            log.debug("t%d / t%d part on p%d's hand seen at home", mine.id, other.id, mine.person)
+            log.debug(
+                "t%d / t%d part on t%d, p%d's hand gone home", mine.id, other.id, c.id, mine.person
+            )
             for p in (mine.person, other.person):
                 members.pop(p, None)
-            out.add(i)
-        return out
+            self._remove(c.id)
+        for tr in self._tracks.values():
+            if tr.id not in waiting:
+                tr.home_hand_ns = None
 
-    def _home_seed(
-        self, seed: _Pending, mine: _Track, other: _Track, p: _Person, other_heads: np.ndarray
+    def _home_hand(
+        self, c: _Track, mine: _Track, other: _Track, p: _Person, other_heads: np.ndarray
     ) -> bool:
-        """Whether ``seed`` is owner ``p``'s hand gone home from the pair ``mine``/``other``
-        (:meth:`_split_on_home_seed`)."""
+        """Whether ``c`` is owner ``p``'s hand gone home from the pair ``mine``/``other``
+        (:meth:`_split_on_home_hand`)."""
         lc, lcfg = self.cfg.lifecycle, self.cfg.labelling
         rest = [self._tracks.get(h) for h in p.hand_ids if h != mine.id]
-        reach = np.linalg.norm(other_heads - seed.position_m, axis=1).min(initial=np.inf)
+        reach = np.linalg.norm(other_heads - c.mean_m, axis=1).min(initial=np.inf)
         return bool(
             mine.joined_ns is not None
-            and seed.first_ns > mine.joined_ns
+            and c.born_ns > mine.joined_ns
             and len(rest) == 1
             and rest[0] is not None
             and rest[0].phase is Phase.NORMAL
-            and np.linalg.norm(rest[0].mean_m - seed.position_m) >= lc.separate_distance_m
-            and np.linalg.norm(seed.position_m - mine.mean_m) >= lc.separate_distance_m
+            and np.linalg.norm(rest[0].mean_m - c.mean_m) >= lc.separate_distance_m
+            and np.linalg.norm(c.mean_m - mine.mean_m) >= lc.separate_distance_m
+            and c.support_ema >= max(mine.support_ema, other.support_ema) - lcfg.contest_margin
             and reach > lcfg.arm_reach_m + lcfg.person_margin_m
         )
 

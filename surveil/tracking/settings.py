@@ -135,12 +135,13 @@ class LifecycleConfig:
         "third hand, so the pair was a hand and a ghost (0 = never), s",
         min=0.0,
     )
-    home_seed: bool = setting(
-        True,
-        "a combined pair of two people's hands separates onto a confirmed seed, first seen "
-        "after the join, that is clearly one owner's while that owner's other hand is tracked "
-        "elsewhere, and out of the other owner's reach: that owner's hand went home from the "
-        "pair and was seen again only there",
+    home_hand_s: float = setting(
+        0.05,
+        "a combined pair of two people's hands separates onto an unlabelled hand tracker, "
+        "started after the join, that is clearly one owner's while that owner's other hand is "
+        "tracked elsewhere, out of the other owner's reach and about as well supported, for "
+        "this long: that owner's hand went home from the pair (0 = never), s",
+        min=0.0,
     )
     pair_seed_gate_m: float = setting(
         0.6,

@@ -1551,14 +1551,14 @@ def test_a_pair_out_of_one_owners_reach_gives_the_estimate_to_the_other_owner(ri
     assert _owner_of(out[-1], spot) == f"p{pa}/right_hand"
 
 
-@pytest.mark.parametrize("home_seed", [True, False])
-def test_a_hand_seen_again_only_at_home_parts_the_pair_it_left(rig, rng, home_seed):
+@pytest.mark.parametrize("wait_s", [0.05, 0.0])
+def test_a_hand_seen_again_only_at_home_parts_the_pair_it_left(rig, rng, wait_s):
     """a (x 1.9) and b (x 3.1) shake right hands; b's hand then leaves unseen and shows again
-    at b's side, 0.7 m from the pair, beyond ``pair_seed_gate_m``. Its seed is clearly b's,
-    b's left hand is tracked elsewhere, and a cannot reach it: it is b's hand gone home,
-    and the pair parts onto it as the seed is confirmed (``home_seed``), b's label there,
-    a's on a's hand, as a pair that met; no new tracker starts. Without the rule the seed
-    starts a tracker and b's label stays with a's hand in the pair."""
+    at b's side, 0.7 m from the pair, beyond ``pair_seed_gate_m``: a new tracker starts on it
+    while the pair holds a's hand. It is clearly b's, b's left hand is tracked elsewhere,
+    and a cannot reach it: it is b's hand gone home, and after ``home_hand_s`` the pair
+    parts onto it, b's label there, a's on a's hand, as a pair that met. With 0 (never)
+    b's label stays with a's hand in the pair."""
     a, b = body((1.9, 2.0), 0.0), body((3.1, 2.0), 180.0)
     rest = _head_and_left
     meet = np.array([2.5, 2.0, 1.05])
@@ -1570,18 +1570,16 @@ def test_a_hand_seen_again_only_at_home_parts_the_pair_it_left(rig, rng, home_se
     frames += [[*rest(a), *rest(b), meet] for _ in range(10)]
     frames += [[*rest(a), *rest(b), meet] for _ in range(3)]  # b's hand leaves unseen
     frames += [[*rest(a), *rest(b), meet, b["right_hand"]] for _ in range(15)]
-    cfg = TrackingConfig(lifecycle=LifecycleConfig(home_seed=home_seed))
+    cfg = TrackingConfig(lifecycle=LifecycleConfig(home_hand_s=wait_s))
     out = run(MultiTargetTracker(cfg, rig, seed=11), frames, rng)
-    starts = [t for f in out[53:] for t in f.transitions if t.old is Phase.UNINITIALISED]
     heads = {s.person: s.mean_m for s in out[-1].targets if s.label.endswith("/head")}
     pa = min(heads, key=lambda k: np.linalg.norm(heads[k] - a["head"]))
     pb = min(heads, key=lambda k: np.linalg.norm(heads[k] - b["head"]))
     parted = [t for f in out for t in f.transitions if t.old is Phase.COMBINED]
-    if home_seed:
+    if wait_s > 0:
         assert len(parted) == 2 and all(t.met for t in parted)
-        assert not starts
         assert _owner_of(out[-1], b["right_hand"]) == f"p{pb}/right_hand"
         assert _owner_of(out[-1], meet) == f"p{pa}/right_hand"
     else:
-        assert not parted and starts
+        assert not parted
         assert not _owner_of(out[-1], b["right_hand"]).startswith(f"p{pb}/")
