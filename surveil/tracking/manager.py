@@ -784,16 +784,37 @@ class MultiTargetTracker:
             k = int(np.argmin(np.where(ok, d0, np.inf)))
             idx = free.pop(k)
             seed = seeds[idx]
-            split = np.array([tr.mean_m, seed.position_m])
-            vel = np.array([tr.vel_mps, seed.velocity_mps])
-            for t in (tr, other):
-                t.split_m, t.split_vel_mps = split, vel
-                t.apart_frames = lc.separate_frames
-                t.split_gain_m = np.inf
+            self._part(
+                (tr, other),
+                np.array([tr.mean_m, seed.position_m]),
+                np.array([tr.vel_mps, seed.velocity_mps]),
+            )
             out.add(idx)
             parted.update((tr.id, other.id))
             log.debug("t%d / t%d part on a new candidate at %s", tr.id, other.id, seed.position_m)
         return out
+
+    def _part(
+        self,
+        pair: tuple[_Track, _Track],
+        modes_m: np.ndarray,
+        vel_mps: np.ndarray,
+        fixed: tuple[int | None, int | None] = (None, None),
+        *,
+        never_met: bool = False,
+    ) -> None:
+        """Make a combined pair separate in this frame set onto ``modes_m`` ((2, 3), with
+        velocities ``vel_mps``): ``fixed`` gives each tracker its mode (None: the owner or
+        angle rule decides, :meth:`_separate`); ``never_met`` makes it a pair that never met
+        (the activity stage drops its episode)."""
+        lc = self.cfg.lifecycle
+        for t, mode in zip(pair, fixed, strict=True):
+            t.split_m, t.split_vel_mps = modes_m, vel_mps
+            t.apart_frames = lc.separate_frames
+            t.split_gain_m = np.inf
+            t.split_fixed = mode
+            if never_met:
+                t.unjoin_frames = lc.separate_frames
 
     def _split_out_of_reach(self, seeds: list[_Pending], used: set[int]) -> set[int]:
         """Part combined pairs of two people's hands that one owner cannot reach; returns the
@@ -833,16 +854,15 @@ class MultiTargetTracker:
                 if k is not None:
                     left_m, left_vel = seeds[k].position_m, seeds[k].velocity_mps
                     out.add(k)
-            split = np.array([tr.mean_m, left_m])
-            vel = np.array([tr.vel_mps, left_vel])
             # the owner who cannot reach the pair's estimate has the hand left behind
-            fixed = (1, 0) if beyond[0] else (0, 1)
-            for t, mode in zip((tr, other), fixed, strict=True):
-                t.split_m, t.split_vel_mps = split, vel
-                t.apart_frames = lc.separate_frames
-                t.split_gain_m = np.inf
-                t.out_of_reach_frames = 0
-                t.split_fixed = mode if beyond.sum() == 1 else None
+            fixed = ((1, 0) if beyond[0] else (0, 1)) if beyond.sum() == 1 else (None, None)
+            self._part(
+                (tr, other),
+                np.array([tr.mean_m, left_m]),
+                np.array([tr.vel_mps, left_vel]),
+                fixed,
+            )
+            tr.out_of_reach_frames = other.out_of_reach_frames = 0
             log.debug(
                 "t%d / t%d part: %.2f m from a head, out of reach; the other hand at %s",
                 tr.id,
@@ -887,15 +907,9 @@ class MultiTargetTracker:
             if not due:
                 continue
             a, b = pair
-            lc = self.cfg.lifecycle
             split = np.array([a.mean_m, c.mean_m])
-            vel = np.array([a.vel_mps, c.vel_mps])
-            sides = self._mode_sides(a, b, split)
-            for t, mode in zip((a, b), sides or (None, None), strict=True):
-                t.split_m, t.split_vel_mps = split, vel
-                t.apart_frames = t.unjoin_frames = lc.separate_frames
-                t.split_gain_m = np.inf
-                t.split_fixed = mode
+            sides = self._mode_sides(a, b, split) or (None, None)
+            self._part((a, b), split, np.array([a.vel_mps, c.vel_mps]), sides, never_met=True)
             log.debug("t%d / t%d part on t%d, a third hand of p%d", a.id, b.id, c.id, a.person)
             del own[a.person]
             self._remove(c.id)
@@ -969,14 +983,12 @@ class MultiTargetTracker:
             if not due:
                 continue
             mine, other = entry
-            lc = self.cfg.lifecycle
-            split = np.array([other.mean_m, c.mean_m])
-            vel = np.array([other.vel_mps, c.vel_mps])
-            for t, mode in ((other, 0), (mine, 1)):
-                t.split_m, t.split_vel_mps = split, vel
-                t.apart_frames = lc.separate_frames
-                t.split_gain_m = np.inf
-                t.split_fixed = mode
+            self._part(
+                (other, mine),
+                np.array([other.mean_m, c.mean_m]),
+                np.array([other.vel_mps, c.vel_mps]),
+                (0, 1),
+            )
             log.debug(
                 "t%d / t%d part on t%d, p%d's hand gone home", mine.id, other.id, c.id, mine.person
             )
