@@ -961,8 +961,8 @@ class MultiTargetTracker:
         tracked elsewhere (normal, ``separate_distance_m`` or more from it), is P's hand
         from the pair or a ghost. Farther than ``arm_reach_m`` + ``person_margin_m`` from
         every other person's head (a ghost on P's chest beside clasped hands is about 1 m
-        from the other owner's; a hand hanging at P's side 1.2 m), ``separate_distance_m`` or more
-        from the pair and at most ``contest_margin`` less supported than it for
+        from the other owner's; a hand hanging at P's side 1.2 m), ``separate_distance_m``
+        or more from the pair and at most ``contest_margin`` less supported than it for
         ``home_hand_s``, it is the hand: the pair separates, P's tracker on it and the
         other owner's on the pair's estimate, and it is retired as a duplicate."""
         wait_s = self.cfg.lifecycle.home_hand_s

@@ -130,7 +130,8 @@ class LifecycleConfig:
     own_pair_third_hand_s: float = setting(
         0.5,
         "a combined pair of one person's two hands separates onto an unlabelled hand tracker "
-        "of that person that has been this long at least separate_distance_m from the pair "
+        "of that person, tracked since before the pair joined and out of every other "
+        "person's reach, that has been this long at least separate_distance_m from the pair "
         "and about as well supported (within labelling.contest_margin): the person has a "
         "third hand, so the pair was a hand and a ghost (0 = never), s",
         min=0.0,
