@@ -751,6 +751,11 @@ class ActivityEngine:
                 if far.any():
                     start = int(ts[:first][far][-1])
                     before = self._latest_carry(hand.target_id, start)
+                    if carry_state(before, th.min_confidence) is None:
+                        # the window restarted as the hand left an earlier still point
+                        # just before this reach and holds too little yet: the surest
+                        # estimate of the reach tells what the hand brought
+                        before = self._surest_carry(hand.target_id, start, climax) or before
                 elif ts[0] > since and np.linalg.norm(ps[0] - point) >= th.seen_reach_m:
                     # the track begins late in the reach (the hand was unseen before): what
                     # it held on the part seen is what it brought, and the estimate that is

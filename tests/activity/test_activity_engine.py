@@ -293,6 +293,20 @@ def test_a_reach_seen_late_takes_its_surest_carry_estimate(rules, activity):
     assert abs(ev.climax_ns - 1.1 * S) <= 0.1 * S
 
 
+@pytest.mark.parametrize("activity", ["pick", "place"])
+def test_a_reach_that_starts_with_an_unsure_estimate_takes_its_surest(rules, activity):
+    """The hand left an earlier still point just before this reach (pick_place take 101: a
+    stop on the way to the cabinet), so its carry window restarted and reads too little to
+    be sure at the reach's start ("? 0.26"); 0.2 s later it reads "carrying 0.96", box in
+    hand. The surest estimate between the reach's start and the stop is the state before."""
+    unsure = empty(0.2)
+    sure = empty() if activity == "pick" else holding(BLUE)
+    after = holding(BLUE) if activity == "pick" else empty()
+    carry = switch(1.0, unsure, switch(1.35, sure, after))
+    ev = only(run(rules, reach(carry).stream()), activity)
+    assert abs(ev.climax_ns - 1.1 * S) <= 0.1 * S
+
+
 @pytest.mark.parametrize(("activity", "found"), [("pick", True), ("place", False)])
 def test_a_pick_allows_a_wandering_estimate_at_the_stop(rules, activity, found):
     """While the hand rests on the object its estimate jumps 8 cm from frame set to frame set
