@@ -198,6 +198,9 @@ class _Pending:
     first_ns: int  # when its run of consecutive frame sets began
     # combined tracker id -> the seed's distance from it when first seen together
     pair_first_m: dict[int, float] = field(default_factory=dict)
+    # consecutive frame sets seen at all, strong or weak (a weak seed, prior below
+    # init_prior_min, has count 0: it may only re-acquire a lost target)
+    seen: int = 0
 
 
 class MultiTargetTracker:
@@ -298,10 +301,12 @@ class MultiTargetTracker:
         self._measure_separation(pts, prior, dt_s, t_ns)
         seeds = self._update_seeds(pts, prior, dt_s, t_ns)
         reacquired = self._reacquire(seeds, t_ns)
-        merged = self._merge_lost(t_ns, reacquired, pairs, seeds)
+        strong = [sd for sd in seeds if sd.count > 0]
+        merged = self._merge_lost(t_ns, reacquired, pairs, strong)
         used = set(reacquired.values())  # seeds taken: no tracker starts on them
-        used |= self._split_on_seeds(seeds, used)
-        used |= self._split_out_of_reach(seeds, used)
+        weak = {i for i, sd in enumerate(seeds) if sd.count == 0}  # they only re-acquire
+        used |= self._split_on_seeds(seeds, used | weak)
+        used |= self._split_out_of_reach(seeds, used | weak)
         self._split_on_third_hand(t_ns)
         self._split_on_home_hand(t_ns)
         rel_v = self._candidate_rel_v(candidates, observations)
@@ -675,8 +680,9 @@ class MultiTargetTracker:
         persisted long enough to be trusted (one-frame ghosts never are). The unexplained
         candidates are also logged for :meth:`_there_as_pair_joined`."""
         lc = self.cfg.lifecycle
-        free = self._unexplained(pts, prior, lc.init_prior_min)
-        self._log_unexplained(pts[free], t_ns)
+        floor = min(lc.init_prior_min, lc.reacquire_prior_min)
+        free = self._unexplained(pts, prior, floor)
+        self._log_unexplained(pts[free[prior[free] >= lc.init_prior_min]], t_ns)
         kept: list[int] = []
         for k in sorted(free.tolist(), key=lambda k: (-prior[k], k)):
             if all(np.linalg.norm(pts[k] - pts[j]) > lc.explained_radius_m for j in kept):
@@ -685,20 +691,31 @@ class MultiTargetTracker:
         seeds: list[_Pending] = []
         taken_prev: set[int] = set()
         for k in kept:
-            best, best_d = -1, lc.init_gate_m
+            strong = prior[k] >= lc.init_prior_min
+            best, best_key = -1, (True, lc.init_gate_m)
             for i, pend in enumerate(self._pending):
                 d = float(np.linalg.norm(pts[k] - pend.position_m))
-                if i not in taken_prev and d <= best_d:
-                    best, best_d = i, d
-            if best >= 0:
+                # a strong seed continues a strong one first: weak ones must not break runs
+                key = (strong and pend.count == 0, d)
+                if i not in taken_prev and d <= lc.init_gate_m and key <= best_key:
+                    best, best_key = i, key
+            prev = self._pending[best] if best >= 0 else None
+            seen = 1 if prev is None else prev.seen + 1
+            if prev is not None and (prev.count > 0 or not strong):
                 taken_prev.add(best)
-                prev = self._pending[best]
                 vel = (pts[k] - prev.position_m) / dt_s if dt_s > 0 else np.zeros(3)
                 seed = _Pending(
-                    pts[k].copy(), prev.count + 1, vel, prev.first_ns, dict(prev.pair_first_m)
+                    pts[k].copy(),
+                    prev.count + 1 if strong else 0,
+                    vel,
+                    prev.first_ns,
+                    dict(prev.pair_first_m),
+                    seen,
                 )
             else:
-                seed = _Pending(pts[k].copy(), 1, np.zeros(3), t_ns)
+                if prev is not None:
+                    taken_prev.add(best)
+                seed = _Pending(pts[k].copy(), int(strong), np.zeros(3), t_ns, seen=seen)
             for tr in combined:
                 seed.pair_first_m.setdefault(tr.id, float(np.linalg.norm(pts[k] - tr.mean_m)))
             seeds.append(seed)
@@ -1110,7 +1127,7 @@ class MultiTargetTracker:
             return {}
         last = np.array([self._lost_prior_m(tr) for tr in lost])
         sp = np.array([sd.position_m for sd in seeds])
-        confirmed = np.array([sd.count >= lc.init_confirm_frames for sd in seeds])
+        confirmed = np.array([sd.seen >= lc.init_confirm_frames for sd in seeds])
         d = np.linalg.norm(last[:, None] - sp[None], axis=2)
         lost_s = np.array([(t_ns - (tr.lost_since_ns or t_ns)) * 1e-9 for tr in lost])
         gate = self._reacquire_gate_m(lost_s)

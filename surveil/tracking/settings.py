@@ -237,6 +237,14 @@ class LifecycleConfig:
         "observation enough (a still hand whose candidate flickers); 0 = off, m",
         min=0.0,
     )
+    reacquire_prior_min: float = setting(
+        0.3,
+        "a lost target may also be re-acquired by a candidate with a prior p(Z) this weak "
+        "(below init_prior_min), persisting init_confirm_frames within its gate: its last "
+        "position is the prior that makes a weak observation enough (section 5.2), m",
+        min=0.0,
+        max=1.0,
+    )
     reacquire_speed_mps: float = setting(
         0.5, "the re-acquisition gate grows by this per second lost, m/s", min=0.0
     )

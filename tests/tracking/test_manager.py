@@ -1257,6 +1257,38 @@ def test_a_still_hand_whose_candidate_flickers_is_reacquired_at_once_near_its_la
     assert len({s.target_id for f in out for s in f.targets}) == 6  # no new tracker
 
 
+@pytest.mark.parametrize("weak_min, back", [(0.2, True), (0.3, False)])
+def test_a_lost_hand_is_reacquired_by_a_weak_candidate_near_its_last_position(
+    rig, rng, weak_min, back
+):
+    # p1's left hand vanishes at frame set 45 and comes back 10 cm away at 60, its candidate
+    # weak (prior 0.25, under init_prior_min 0.3: the hand is cut off from the silhouette in
+    # one view, and that view's silhouette term pulls its prior down)
+    frames = two_people_frames(90, b_from=0)
+    back_at = frames[44][1] + [0.0, 0.1, 0.0]
+    sets = []
+    for i, pts in enumerate(frames):
+        cs = candidates([p for k, p in enumerate(pts) if k != 1 or i < 45], rng)
+        if i >= 60:
+            weak = back_at + rng.normal(0, 0.005, 3)
+            cs = CandidateSet(np.vstack([cs.points_m, weak]), np.append(cs.prior, 0.25))
+        sets.append(cs)
+    cfg = TrackingConfig(
+        lifecycle=LifecycleConfig(retire_unclaimed_s=0.0, reacquire_prior_min=weak_min)
+    )
+    trk = MultiTargetTracker(cfg, rig, seed=4)
+    out = [trk.step(i * DT_NS, cs) for i, cs in enumerate(sets)]
+    hand = next(s.target_id for s in out[44].targets if s.label == "p1/left_hand")
+    assert {s.target_id: s.phase for s in out[59].targets}[hand] is Phase.LOST
+    last = {s.target_id: s for s in out[89].targets}[hand]
+    if back:  # its last position is the prior that makes a weak candidate enough
+        assert last.phase is Phase.NORMAL and last.label == "p1/left_hand"
+        assert np.linalg.norm(last.mean_m - back_at) < 0.03
+    else:
+        assert last.phase is Phase.LOST
+    assert len({s.target_id for f in out for s in f.targets}) == 6  # weak: never a new tracker
+
+
 def _ghost_story(a, b, ghost, rng) -> list[CandidateSet]:
     """70 frame sets, every point strong (prior 0.95): A's head, left hand and a ghost for
     30; B (head, hands) joins for 10; A's right hand shows for the last 30."""
