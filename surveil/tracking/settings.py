@@ -241,7 +241,8 @@ class LifecycleConfig:
         0.3,
         "a lost target may also be re-acquired by a candidate with a prior p(Z) this weak "
         "(below init_prior_min), persisting init_confirm_frames within its gate: its last "
-        "position is the prior that makes a weak observation enough (section 5.2), m",
+        "position is the prior that makes a weak observation enough (section 5.2); the "
+        "default, init_prior_min, is off, unitless",
         min=0.0,
         max=1.0,
     )
