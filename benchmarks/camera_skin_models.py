@@ -1,7 +1,8 @@
 """Per-camera skin models for the bundled scenes, trained on each take's first frames.
 
     python benchmarks/camera_skin_models.py [--fraction 0.34] [--threshold 0.1]
-        [--unbounded] [--src out/bench_synth] --out out/bench_cam [NAME ...]
+        [--unbounded] [--src out/bench_synth] --out out/bench_cam
+        [--scene-seeds 101-102] [NAME ...]
 
 For each scene, ``OUT/<name>/`` becomes a view of ``SRC/<name>/`` (links to its videos and
 ground truth, a copy of its rig) whose ``ground_truth/masks`` hold only the first
@@ -14,7 +15,9 @@ few frames of a camera and run on the rest. Then
     python benchmarks/candidates_bench.py --out OUT
     python benchmarks/carry_bench.py --masks none --out OUT
 
-measure the pipeline with those models (docs/blobs.md, "Per-camera models").
+measure the pipeline with those models (docs/blobs.md, "Per-camera models"). ``NAME@N`` and
+``--scene-seeds`` name held-out takes, as in ``pipeline_bench.py``; they are rendered into
+``--src`` first if missing.
 """
 
 from __future__ import annotations
@@ -26,11 +29,10 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from pipeline_bench import ROOT
+from pipeline_bench import ROOT, add_scene_arguments, render, scene_names
 
 from surveil.blobs.settings import SkinConfig
 from surveil.io.skin_model import save_skin_model, skin_models_dir, train_camera_skin_models
-from surveil.synth.scene import synthesise
 
 
 def early_view(src: Path, dst: Path, fraction: float) -> int:
@@ -61,7 +63,7 @@ def early_view(src: Path, dst: Path, fraction: float) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("names", nargs="*")
+    add_scene_arguments(parser)
     parser.add_argument("--src", type=Path, default=ROOT / "out" / "bench_synth")
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--fraction", type=float, default=0.34)
@@ -70,12 +72,12 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.out.resolve() == args.src.resolve():
         parser.error("--out must differ from --src (its recordings are linked, not copied)")
-    names = args.names or sorted(p.stem for p in (ROOT / "recordings").glob("*.toml"))
+    names = scene_names(args)
     cfg = dataclasses.replace(
         SkinConfig(), camera_threshold=args.threshold, bound_by_generic=not args.unbounded
     )
     for name in names:
-        synthesise(ROOT / "recordings" / f"{name}.toml", args.src / name)
+        render(name, args.src)
         dst = args.out / name
         n = early_view(args.src / name, dst, args.fraction)
         models = train_camera_skin_models(dst, np.random.default_rng(0), cfg, every=1)

@@ -2,7 +2,7 @@
 switches, hand error, false targets per frame.
 
     python benchmarks/compare_runs.py --a CONFIG_A[,CONFIG_A2] --b CONFIG_B[,CONFIG_B2]
-        [--seeds 0-5] [--out out/bench_synth] [--all] [NAME ...]
+        [--seeds 0-5] [--out out/bench_synth] [--out-b DIR] [--all] [NAME ...]
 
 Reads the MCAPs that ``seed_spread.py --config FILE`` (or ``pipeline_bench.py``) wrote:
 ``<name>.<stem>.seed<N>.mcap`` for each config file's stem; ``-`` stands for the default
@@ -12,8 +12,14 @@ frozen worktrees, each running ``seed_spread.py --seeds 0-2`` and ``--seeds 3-5`
 parallel under two config names (which may hold nothing but a comment), and this script
 then sees both halves as one side. Nothing is run here.
 
-Prints the rows that differ (``--all``: every row) and the totals of each side. Scenes and
-seeds where either side has no run are skipped and counted.
+``--out-b`` reads side B from another folder (e.g. the recordings with per-camera skin
+models that ``camera_skin_models.py`` makes).
+
+Prints the rows that differ (``--all``: every row), the totals of each side, and how far
+B's events (matched minus false, per run) and identity switches can be told from A's over
+paired runs: a bootstrap interval of the total difference and a sign test
+(:mod:`surveil.eval.paired`). Scenes and seeds where either side has no run are skipped and
+counted.
 """
 
 from __future__ import annotations
@@ -24,6 +30,8 @@ import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 from pipeline_bench import (  # noqa: E402
@@ -33,6 +41,7 @@ from pipeline_bench import (  # noqa: E402
     scene_names,
 )
 
+from surveil.eval.paired import paired_difference  # noqa: E402
 from surveil.eval.score import EvalConfig, evaluate  # noqa: E402
 
 COLUMNS = ("matched", "false", "switches", "hand mm", "false / frame")
@@ -104,27 +113,39 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--b", required=True, help="config file(s) of side B, comma-separated")
     parser.add_argument("--seeds", type=parse_seeds, default=parse_seeds("0-5"))
     parser.add_argument("--out", type=Path, default=ROOT / "out" / "bench_synth")
+    parser.add_argument("--out-b", type=Path, help="side B's folder (default: --out)")
     parser.add_argument("--all", action="store_true", help="print rows that agree too")
     args = parser.parse_args(argv)
+    outs = (args.out, args.out_b or args.out)
     sides = (_configs(args.a), _configs(args.b))
     totals = [[0, 0, 0], [0, 0, 0]]
     pooled = [Pooled(), Pooled()]
+    net: list[list[int]] = [[], []]  # events matched minus false, per run
+    switches: list[list[int]] = [[], []]
     skipped = 0
     head = " | ".join(COLUMNS)
     print(f"| scene | seed | A: {head} | B: {head} |")
     print("|---|---|" + "---|" * (2 * len(COLUMNS)))
     for name in scene_names(args):
         for seed in args.seeds:
-            runs = [_run(args.out, name, configs, seed) for configs in sides]
+            runs = [
+                _run(out, name, configs, seed) for out, configs in zip(outs, sides, strict=True)
+            ]
             if None in runs:
                 skipped += 1
                 continue
-            (a, pa), (b, pb) = (scores(args.out, name, mcap) for mcap in runs)
+            (a, pa), (b, pb) = (
+                scores(out, name, mcap) for out, mcap in zip(outs, runs, strict=True)
+            )
             for side, row in zip(totals, (a, b), strict=True):
                 for k in range(3):
                     side[k] += row[k]
             pooled[0].add(pa)
             pooled[1].add(pb)
+            net[0].append(a[0] - a[1])
+            net[1].append(b[0] - b[1])
+            switches[0].append(a[2])
+            switches[1].append(b[2])
             if args.all or a[:3] != b[:3]:
                 print(f"| {name} | {seed} | {_cells(a)} | {_cells(b)} |")
     for label, side, pool in zip("AB", totals, pooled, strict=True):
@@ -132,6 +153,11 @@ def main(argv: list[str] | None = None) -> int:
             f"{label}: {side[0]} events matched, {side[1]} false, {side[2]} identity switches; "
             + pool.summary()
         )
+    if net[0]:
+        diff = paired_difference(np.array(net[0]), np.array(net[1]))
+        print(diff.summary("events matched minus false"))
+        diff = paired_difference(np.array(switches[0]), np.array(switches[1]))
+        print(diff.summary("identity switches"))
     if skipped:
         print(f"{skipped} scene and seed pairs skipped: a side has no run of them")
     return 0
