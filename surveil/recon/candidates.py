@@ -9,7 +9,7 @@ are dropped and close ones merged. See docs/candidates.md.
 from __future__ import annotations
 
 import logging
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 
 import numpy as np
 
@@ -82,6 +82,7 @@ def silhouette_prior(
     by_cam: dict[int, CameraObservation],
     sigma_px: float,
     drop_worst: bool = True,
+    projected: Mapping[int, tuple[np.ndarray, np.ndarray]] | None = None,
 ) -> np.ndarray:
     """p_b (eq. 27): product over observed cameras Z projects into of a Gaussian in the
     distance (px) of Z's projection to the nearest silhouette pixel.
@@ -90,13 +91,16 @@ def silhouette_prior(
     is left out wherever three or more cameras see Z: one camera whose background model
     failed (started late with people in view, a sudden light change) would otherwise veto
     every candidate in the room.
+
+    ``projected``: ``Camera.project(points_m)`` per rig camera index of ``by_cam``, when the
+    caller has it already (:func:`project_into`).
     """
     log_pb = np.zeros(len(points_m))
     worst = np.zeros(len(points_m))  # the lowest log term
     n_seen = np.zeros(len(points_m), np.int64)
     for m, obs in by_cam.items():
         cam = rig.cameras[m]
-        px, depth = cam.project(points_m)
+        px, depth = cam.project(points_m) if projected is None else projected[m]
         inside = cam.in_image(px, depth)
         if not inside.any():
             continue
@@ -118,6 +122,15 @@ def silhouette_prior(
     return np.exp(log_pb)
 
 
+def project_into(
+    points_m: np.ndarray, rig: Rig, cameras: Iterable[int]
+) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """``Camera.project(points_m)`` for each rig camera index in ``cameras``. OpenCV projects
+    each point on its own, so a subset's projections are rows of these: the candidate stage
+    projects its points once for p_b and takes the merged ones' rows for their support."""
+    return {m: rig.cameras[m].project(points_m) for m in cameras}
+
+
 def _merge(
     points_m: np.ndarray, prior: np.ndarray, radius_m: float, boost: float
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -129,18 +142,21 @@ def _merge(
     pts = points_m[order]
     pri = prior[order]
     close = np.einsum("ijk,ijk->ij", pts[:, None] - pts[None], pts[:, None] - pts[None])
-    close = close < radius_m * radius_m
-    alive = np.ones(len(pts), dtype=bool)
+    rows, cols = np.nonzero(close < radius_m * radius_m)
+    # each candidate's close neighbours, ascending; the greedy loop runs on Python lists
+    near = np.split(cols, np.searchsorted(rows, np.arange(1, len(pts)))) if len(pts) else []
+    alive = [True] * len(pts)
     kept, kept_prior = [], []
-    for i in range(len(pts)):
+    for i, neighbours in enumerate(near):
         if not alive[i]:
             continue
-        absorbed = close[i] & alive
-        absorbed[i] = False
-        alive[absorbed] = False
         alive[i] = False
+        absorbed = [j for j in neighbours.tolist() if alive[j]]
+        for j in absorbed:
+            alive[j] = False
+        gain = boost * pri[absorbed].sum() if absorbed else 0.0
         kept.append(i)
-        kept_prior.append(min(1.0, pri[i] + boost * pri[absorbed].sum()))
+        kept_prior.append(min(1.0, pri[i] + gain))
     return order[np.array(kept, dtype=np.intp)], np.array(kept_prior)
 
 
@@ -169,17 +185,18 @@ def view_support(
     rig: Rig,
     by_cam: Mapping[int, CameraObservation],
     radius_px: float,
+    projected: Mapping[int, tuple[np.ndarray, np.ndarray]] | None = None,
 ) -> np.ndarray:
     """(K, M) int: per point and rig camera, the blob whose centroid is nearest to the
     point's projection if within ``radius_px`` (-1: none, or the camera did not see it).
     A candidate's own two blobs (``cam_pairs``, ``blob_pairs``; rows of -1 for points no
-    camera pair made) always support it."""
+    camera pair made) always support it. ``projected`` as in :func:`silhouette_prior`."""
     k = len(points_m)
     support = np.full((k, len(rig.cameras)), -1, dtype=np.int64)
     for m, obs in by_cam.items():
         if len(obs.blobs) == 0:
             continue
-        px, depth = rig.cameras[m].project(points_m)
+        px, depth = rig.cameras[m].project(points_m) if projected is None else projected[m]
         inside = rig.cameras[m].in_image(px, depth)
         dist = np.linalg.norm(px[:, None] - obs.blobs.centroids_px[None], axis=2)
         nearest = dist.argmin(axis=1)
@@ -220,8 +237,9 @@ def explain_away(support: np.ndarray, prior: np.ndarray) -> np.ndarray:
     order = np.lexsort((-prior, -n_views))
     claimed: set[tuple[int, int]] = set()
     keep = np.zeros(len(prior), dtype=bool)
-    for k in order:
-        views = [(m, int(b)) for m, b in enumerate(support[k]) if b >= 0]
+    rows = support.tolist()  # Python ints: the loop reads every row, cell by cell
+    for k in order.tolist():
+        views = [(m, b) for m, b in enumerate(rows[k]) if b >= 0]
         fresh = [v for v in views if v not in claimed]
         if len(fresh) < 2 and len(fresh) < len(views):
             continue
@@ -405,7 +423,14 @@ def make_candidates(
         keep &= ~(restored_all[ia] & restored_all[ib])
     ia, ib, points, half_gap, p_t = ia[keep], ib[keep], points[keep], half_gap[keep], p_t[keep]
     if cfg.rel_v_to_floor:
-        d_v = [floor_relative_v(points, cam_all[g], *rows_all[g].T, rig) for g in (ia, ib)]
+        # both blobs' rows at once: one floor projection per camera
+        both = np.concatenate([ia, ib])
+        d_v = np.split(
+            floor_relative_v(
+                np.concatenate([points, points]), cam_all[both], *rows_all[both].T, rig
+            ),
+            2,
+        )
     else:
         d_v = [rel_v_all[ia], rel_v_all[ib]]
     p_o = gauss_term(d_v[0] - d_v[1], cfg.sigma_rel_v)
@@ -415,7 +440,10 @@ def make_candidates(
     ia, ib, points, half_gap = ia[keep], ib[keep], points[keep], half_gap[keep]
     p_o, p_t = p_o[keep], p_t[keep]
     # eq. 27 (silhouette consistency) on the survivors only
-    p_b = silhouette_prior(points, rig, by_cam, cfg.sigma_silhouette_px, cfg.silhouette_drop_worst)
+    projected = project_into(points, rig, by_cam)
+    p_b = silhouette_prior(
+        points, rig, by_cam, cfg.sigma_silhouette_px, cfg.silhouette_drop_worst, projected
+    )
     prior = p_o * p_t * p_b  # eq. 19
     ok = (p_b >= cfg.term_threshold) & (prior >= cfg.prior_threshold)
     ia, ib, points, half_gap, prior = ia[ok], ib[ok], points[ok], half_gap[ok], prior[ok]
@@ -429,7 +457,16 @@ def make_candidates(
     cam_pairs = np.column_stack([cam_all[ia], cam_all[ib]])
     blob_pairs = np.column_stack([blob_all[ia], blob_all[ib]])
     if cfg.explain_away:
-        support = view_support(points, cam_pairs, blob_pairs, rig, by_cam, cfg.support_radius_px)
+        merged = np.flatnonzero(ok)[kept]
+        support = view_support(
+            points,
+            cam_pairs,
+            blob_pairs,
+            rig,
+            by_cam,
+            cfg.support_radius_px,
+            {m: (px[merged], depth[merged]) for m, (px, depth) in projected.items()},
+        )
         real = explain_away(support, prior)
         if expected_m is not None:
             real = rescue_expected(
