@@ -21,7 +21,7 @@ class PairedDifference:
     """B minus A over paired cells.
 
     n_cells : cells compared
-    n_better, n_worse : cells where B is above / below A
+    n_higher, n_lower : cells where B is above / below A
     total : sum over the cells of B - A
     low, high : bootstrap interval of ``total`` (cells resampled with replacement), at
         ``level``
@@ -31,8 +31,8 @@ class PairedDifference:
     """
 
     n_cells: int
-    n_better: int
-    n_worse: int
+    n_higher: int
+    n_lower: int
     total: float
     low: float
     high: float
@@ -44,7 +44,7 @@ class PairedDifference:
         return (
             f"B - A, {what}: total {self.total:+g} over {self.n_cells} runs "
             f"({100 * self.level:.0f} % bootstrap interval {self.low:+g} to {self.high:+g}); "
-            f"B better in {self.n_better}, worse in {self.n_worse} (sign test p = "
+            f"B higher in {self.n_higher}, lower in {self.n_lower} (sign test p = "
             f"{self.p_sign:.2f})"
         )
 
@@ -60,7 +60,7 @@ def paired_difference(
     the tracker's seeds, and judge held-out recordings separately.
 
     >>> r = paired_difference(np.array([3, 2, 2, 0]), np.array([4, 2, 2, 0]))
-    >>> r.total, r.n_better, r.n_worse, r.p_sign
+    >>> r.total, r.n_higher, r.n_lower, r.p_sign
     (1.0, 1, 0, 1.0)
     """
     a = np.asarray(a, dtype=np.float64).ravel()
@@ -68,7 +68,7 @@ def paired_difference(
     if a.shape != b.shape:
         raise ValueError(f"a has {a.size} cells and b {b.size}: they must be paired")
     d = b - a
-    n_better, n_worse = int((d > 0).sum()), int((d < 0).sum())
+    n_higher, n_lower = int((d > 0).sum()), int((d < 0).sum())
     total = float(d.sum())
     if not d.any():
         low = high = 0.0
@@ -83,5 +83,5 @@ def paired_difference(
         )
         low = float(boot.confidence_interval.low)
         high = float(boot.confidence_interval.high)
-    p = stats.binomtest(n_better, n_better + n_worse).pvalue if n_better + n_worse else 1.0
-    return PairedDifference(d.size, n_better, n_worse, total, low, high, level, float(p))
+    p = stats.binomtest(n_higher, n_higher + n_lower).pvalue if n_higher + n_lower else 1.0
+    return PairedDifference(d.size, n_higher, n_lower, total, low, high, level, float(p))

@@ -7,7 +7,7 @@ from surveil.eval.paired import paired_difference
 def test_a_gain_in_every_run_is_told_from_noise():
     a = np.array([2, 4, 1, 0, 3, 2, 2, 4, 1, 0, 3, 2])
     r = paired_difference(a, a + 1)
-    assert (r.total, r.n_better, r.n_worse) == (12.0, 12, 0)
+    assert (r.total, r.n_higher, r.n_lower) == (12.0, 12, 0)
     assert r.low > 0
     assert r.p_sign < 0.001
 
