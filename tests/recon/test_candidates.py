@@ -18,7 +18,10 @@ from surveil.recon.candidates import (
     explain_away,
     floor_relative_v,
     make_candidates,
+    project_into,
     rescue_expected,
+    silhouette_prior,
+    view_support,
 )
 from surveil.recon.settings import CandidateConfig
 
@@ -381,6 +384,32 @@ def test_points_behind_or_below_are_dropped():
     below = np.array([[3.0, 2.0, -0.3]])
     obs = [_observation(cam, below) for cam in rig]
     assert len(make_candidates(obs, rig, CFG).points_m) == 0
+
+
+def test_projections_shared_by_p_b_and_support_are_those_of_projecting_again(rng):
+    # the candidate stage projects once and takes rows of the result for a subset
+    rig = _rig()
+    targets = rng.uniform([2.0, 1.0, 0.8], [4.0, 3.0, 1.8], size=(5, 3))
+    by_cam = {m: _observation(cam, targets) for m, cam in enumerate(rig.cameras)}
+    points = rng.uniform([1.5, 0.5, 0.3], [4.5, 3.5, 2.0], size=(40, 3))
+    projected = project_into(points, rig, by_cam)
+    np.testing.assert_array_equal(
+        silhouette_prior(points, rig, by_cam, 4.0, True, projected),
+        silhouette_prior(points, rig, by_cam, 4.0, True),
+    )
+    subset = np.array([3, 7, 8, 21, 39])
+    rows = {m: (px[subset], depth[subset]) for m, (px, depth) in projected.items()}
+    np.testing.assert_array_equal(
+        view_support(points[subset], None, None, rig, by_cam, 6.0, rows),
+        view_support(points[subset], None, None, rig, by_cam, 6.0),
+    )
+
+
+def test_merge_with_no_radius_keeps_every_candidate_strongest_first():
+    pts = np.array([[0.0, 0, 1], [0.0, 0, 1], [1.0, 0, 1]])
+    kept, prior = _merge(pts, np.array([0.3, 0.6, 0.9]), radius_m=0.0, boost=0.5)
+    np.testing.assert_array_equal(kept, [2, 1, 0])
+    np.testing.assert_allclose(prior, [0.9, 0.6, 0.3])
 
 
 def test_is_deterministic(rng):
