@@ -136,7 +136,7 @@ def silhouettes_from_mask(
     if n_all > 1:
         # every component lies in their joint box; outside it the labels are 0 either way
         x0, y0, x1, y1 = _joint_box(stats[1:, :4], 0, (h, w))
-        labels[y0:y1, x0:x1] = relabel[labels[y0:y1, x0:x1]]
+        labels[y0:y1, x0:x1] = np.take(relabel, labels[y0:y1, x0:x1])
     top = stats[keep, cv2.CC_STAT_TOP].astype(np.float64)
     bottom = top + stats[keep, cv2.CC_STAT_HEIGHT] - 1
     if not len(keep):

