@@ -6,11 +6,11 @@ import time
 from collections.abc import Iterator
 
 from surveil.blobs.background import BackgroundModel, learning_frames_after, shadow_region
-from surveil.blobs.extract import extract_blobs
+from surveil.blobs.extract import blob_margin_px, extract_blobs
 from surveil.datatypes import CameraObservation, FrameSet
 from surveil.io.recording import Recording
 from surveil.io.skin_model import load_camera_skin_models
-from surveil.pipeline import PipelineConfig
+from surveil.pipeline import PipelineConfig, silhouette_distance_cap_px
 
 
 def observe_recording(
@@ -19,6 +19,7 @@ def observe_recording(
     n_people: int | None = None,
     max_frames: int | None = None,
     changed: bool = False,
+    skin_near_people: bool = False,
 ) -> Iterator[tuple[FrameSet, dict[str, CameraObservation], dict[str, list[float]]]]:
     """Per frame set: the frames, every camera's observation (by camera name) and the seconds
     each camera spent in ``background``, ``skin`` and ``blobs``.
@@ -26,7 +27,11 @@ def observe_recording(
     Background models start on the run's clock as in ``surveil run``
     (:func:`learning_frames_after`); blobs are chosen for ``n_people`` (default: the number
     of silhouettes, where a run uses its tracked heads); each camera's skin model is the one
-    a run uses: saved beside the rig (``surveil train-skin``), else the default.
+    a run uses: saved beside the rig (``surveil train-skin``), else the default. As in a run,
+    the silhouettes' distances are exact only up to the run's cap (beyond it nothing changes
+    the candidates). ``skin_near_people``: skin is classified only in the boxes around the
+    silhouettes, as a run does (the same blobs, a run's stage time); else everywhere, for the
+    diagnostics that look at skin far from people.
     ``changed``: the silhouettes carry MOG2's changed mask even when ``cfg`` does not ask
     for it.
     """
@@ -44,14 +49,18 @@ def observe_recording(
                     cfg.background,
                     img.shape[:2],
                     learning_frames_after(cfg.background, fs.index),
-                    shadow_region=shadow_region(cfg.background, rec.rig, cam, img.shape[:2]),
+                    silhouette_distance_cap_px(cfg),
+                    shadow_region(cfg.background, rec.rig, cam, img.shape[:2]),
                 )
             t0 = time.perf_counter()
             requests = cfg.background_requests()
             requests["changed"] |= changed
             sil = models[cam].step(img, **requests)
             t1 = time.perf_counter()
-            skin = skin_models[cam].classify(img)
+            boxes = (
+                sil.boxes(blob_margin_px(cfg.blobs, img.shape[1])) if skin_near_people else None
+            )
+            skin = skin_models[cam].classify(img, boxes)
             t2 = time.perf_counter()
             blobs = extract_blobs(skin, sil, cfg.blobs, n_people, img)
             t3 = time.perf_counter()
