@@ -118,10 +118,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     outs = (args.out, args.out_b or args.out)
     sides = (_configs(args.a), _configs(args.b))
-    totals = [[0, 0, 0], [0, 0, 0]]
+    counts: list[list[tuple]] = [[], []]  # per side, per run: matched, false, switches
     pooled = [Pooled(), Pooled()]
-    net: list[list[int]] = [[], []]  # events matched minus false, per run
-    switches: list[list[int]] = [[], []]
     skipped = 0
     head = " | ".join(COLUMNS)
     print(f"| scene | seed | A: {head} | B: {head} |")
@@ -137,27 +135,23 @@ def main(argv: list[str] | None = None) -> int:
             (a, pa), (b, pb) = (
                 scores(out, name, mcap) for out, mcap in zip(outs, runs, strict=True)
             )
-            for side, row in zip(totals, (a, b), strict=True):
-                for k in range(3):
-                    side[k] += row[k]
+            counts[0].append(a[:3])
+            counts[1].append(b[:3])
             pooled[0].add(pa)
             pooled[1].add(pb)
-            net[0].append(a[0] - a[1])
-            net[1].append(b[0] - b[1])
-            switches[0].append(a[2])
-            switches[1].append(b[2])
             if args.all or a[:3] != b[:3]:
                 print(f"| {name} | {seed} | {_cells(a)} | {_cells(b)} |")
-    for label, side, pool in zip("AB", totals, pooled, strict=True):
+    a_runs, b_runs = (np.array(side, dtype=np.int64).reshape(-1, 3) for side in counts)
+    for label, runs, pool in zip("AB", (a_runs, b_runs), pooled, strict=True):
+        matched, false, switches = runs.sum(axis=0).tolist()
         print(
-            f"{label}: {side[0]} events matched, {side[1]} false, {side[2]} identity switches; "
+            f"{label}: {matched} events matched, {false} false, {switches} identity switches; "
             + pool.summary()
         )
-    if net[0]:
-        diff = paired_difference(np.array(net[0]), np.array(net[1]))
+    if len(a_runs):
+        diff = paired_difference(a_runs[:, 0] - a_runs[:, 1], b_runs[:, 0] - b_runs[:, 1])
         print(diff.summary("events matched minus false"))
-        diff = paired_difference(np.array(switches[0]), np.array(switches[1]))
-        print(diff.summary("identity switches"))
+        print(paired_difference(a_runs[:, 2], b_runs[:, 2]).summary("identity switches"))
     if skipped:
         print(f"{skipped} scene and seed pairs skipped: a side has no run of them")
     return 0
