@@ -730,24 +730,24 @@ class MultiTargetTracker:
         while log_ and (t_ns - log_[0][0]) * 1e-9 > UNEXPLAINED_LOG_S:
             log_.popleft()
 
-    def _there_as_pair_joined(self, pair: _Track, seed: _Pending) -> bool:
-        """True if the seed was there before, as the pair joined, and has since vanished
-        and come back: an unexplained candidate within ``init_gate_m`` of it, before its
-        present run of frame sets, so close in time to the joining that neither of the
-        pair's targets could have been there (at ``leave_speed_mps`` a hand needs (distance
-        - gate) / speed to get from where the pair joined to the seed). Such a seed is not
-        a target leaving the pair but something that stood beside it (a ghost from
-        skin-coloured clothes beside shaking hands). A seed whose present run began that
-        early is not judged: its own steady evidence says the joining was not of two
-        targets (a tracker that slid onto the other's hand while its own went home)."""
+    def _there_as_pair_joined(self, pair: _Track, seed_m: np.ndarray, first_ns: int) -> bool:
+        """True if a seed at ``seed_m`` (or a tracker there since ``first_ns``) was there
+        before, as the pair joined, and has since vanished and come back: an unexplained
+        candidate within ``init_gate_m`` of it, before its present run of frame sets (which
+        began at ``first_ns``), so close in time to the joining that neither of the pair's
+        targets could have been there (at ``leave_speed_mps`` a hand needs (distance - gate)
+        / speed to get from where the pair joined to the seed). Such a seed is not a target
+        leaving the pair but something that stood beside it (a ghost from skin-coloured
+        clothes beside shaking hands). A seed whose present run began that early is not
+        judged: its own steady evidence says the joining was not of two targets (a tracker
+        that slid onto the other's hand while its own went home)."""
         lc = self.cfg.lifecycle
         if pair.joined_ns is None or pair.joined_m is None:
             return False
-        seed_m = seed.position_m
         travel_s = max(float(np.linalg.norm(seed_m - pair.joined_m)) - lc.init_gate_m, 0.0)
         travel_ns = travel_s / lc.leave_speed_mps * 1e9
         start_ns = pair.joined_ns - travel_ns
-        stop_ns = min(pair.joined_ns + travel_ns, seed.first_ns)
+        stop_ns = min(pair.joined_ns + travel_ns, first_ns)
         for t_ns, pts in self._unexplained_log:  # oldest first
             if t_ns >= stop_ns:
                 break
@@ -795,7 +795,8 @@ class MultiTargetTracker:
                 & ((d0 <= lc.pair_seed_gate_m) | (fit > 1))
             )
             for j in np.flatnonzero(ok):
-                ok[j] = not self._there_as_pair_joined(tr, seeds[free[j]])
+                seed = seeds[free[j]]
+                ok[j] = not self._there_as_pair_joined(tr, seed.position_m, seed.first_ns)
             if not ok.any():
                 continue
             k = int(np.argmin(np.where(ok, d0, np.inf)))
@@ -981,7 +982,10 @@ class MultiTargetTracker:
         from the other owner's; a hand hanging at P's side 1.2 m), ``separate_distance_m``
         or more from the pair and at most ``contest_margin`` less supported than it for
         ``home_hand_s``, it is the hand: the pair separates, P's tracker on it and the
-        other owner's on the pair's estimate, and it is retired as a duplicate."""
+        other owner's on the pair's estimate, and it is retired as a duplicate. Not if it
+        has been anywhere an unexplained candidate stood as the pair joined
+        (:meth:`_there_as_pair_joined`): a ghost on P's chest can be just over that distance
+        from the other head (bundled handshake, seed 0: 1.13 m)."""
         wait_s = self.cfg.lifecycle.home_hand_s
         members: dict[int, tuple[_Track, _Track]] = {}  # owner -> (its hand, the other)
         for a, b in self._combined_pairs():
@@ -1034,6 +1038,10 @@ class MultiTargetTracker:
             and np.linalg.norm(c.mean_m - mine.mean_m) >= lc.separate_distance_m
             and c.support_ema >= max(mine.support_ema, other.support_ema) - lcfg.contest_margin
             and reach > lcfg.arm_reach_m + lcfg.person_margin_m
+            and not any(
+                self._there_as_pair_joined(mine, m, c.born_ns)
+                for m in [c.mean_m, *(m for _, m in c.history)]
+            )
         )
 
     def _seed_of_left_hand(
