@@ -6,7 +6,7 @@ import time
 from collections.abc import Iterator
 
 from surveil.blobs.background import BackgroundModel, learning_frames_after, shadow_region
-from surveil.blobs.extract import blob_margin_px, extract_blobs
+from surveil.blobs.extract import SceneryMask, blob_margin_px, extract_blobs
 from surveil.datatypes import CameraObservation, FrameSet
 from surveil.io.recording import Recording
 from surveil.io.skin_model import load_camera_skin_models
@@ -37,6 +37,7 @@ def observe_recording(
     """
     skin_models = load_camera_skin_models(rec.rig_path, rec.camera_names)
     models: dict[str, BackgroundModel] = {}
+    scenery = {cam: SceneryMask(model) for cam, model in skin_models.items()}
     for fs in rec.framesets(stop=max_frames):
         observations: dict[str, CameraObservation] = {}
         times: dict[str, list[float]] = {"background": [], "skin": [], "blobs": []}
@@ -62,7 +63,8 @@ def observe_recording(
             )
             skin = skin_models[cam].classify(img, boxes)
             t2 = time.perf_counter()
-            blobs = extract_blobs(skin, sil, cfg.blobs, n_people, img)
+            on_scenery = scenery[cam].mask(models[cam]) if cfg.blobs.scenery_share > 0 else None
+            blobs = extract_blobs(skin, sil, cfg.blobs, n_people, img, on_scenery)
             t3 = time.perf_counter()
             times["background"].append(t1 - t0)
             times["skin"].append(t2 - t1)

@@ -27,7 +27,7 @@ from surveil.activity import ActivityEngine, RuleSet
 from surveil.armpose import ArmPoseConfig, ArmTracker
 from surveil.armpose.feed import with_arm_hands
 from surveil.blobs.background import BackgroundModel, learning_frames_after, shadow_region
-from surveil.blobs.extract import blob_margin_px, extract_blobs
+from surveil.blobs.extract import SceneryMask, blob_margin_px, extract_blobs
 from surveil.blobs.settings import BackgroundConfig, BlobConfig
 from surveil.blobs.skin import SkinModel, default_skin_model
 from surveil.camera import Rig
@@ -169,6 +169,7 @@ class Pipeline:
             cam.name: (skin_models or {}).get(cam.name) or default_skin_model() for cam in rig
         }
         self.backgrounds: dict[str, BackgroundModel] = {}
+        self.scenery = {name: SceneryMask(model) for name, model in self.skin_models.items()}
         self.tracker = MultiTargetTracker(cfg.tracking, rig, seed=cfg.seed)
         self.carry = CarryAnalyser(cfg.carry, rig)
         self.activity = ActivityEngine(rules)
@@ -250,7 +251,8 @@ class Pipeline:
             )
             t2 = time.perf_counter()
             n_people = self.cfg.people_hint or max(silhouettes.n, self._n_heads, 1)
-            blobs = extract_blobs(skin, silhouettes, self.cfg.blobs, n_people, img)
+            scenery = self.scenery[cam].mask(bg) if self.cfg.blobs.scenery_share > 0 else None
+            blobs = extract_blobs(skin, silhouettes, self.cfg.blobs, n_people, img, scenery)
             t3 = time.perf_counter()
             timings["background"] += 1000 * (t1 - t0)
             timings["skin"] += 1000 * (t2 - t1)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import cv2
 import numpy as np
 import pytest
@@ -173,9 +175,11 @@ def test_the_changed_mask_is_asked_for_only_by_the_blob_tests_that_read_it():
     def wants(blobs: BlobConfig) -> bool:
         return PipelineConfig(blobs=blobs).background_requests()["changed"]
 
-    assert not wants(BlobConfig())  # both tests are off by default: no mask, no cost
-    assert wants(BlobConfig(min_changed_share=0.3))
-    assert wants(BlobConfig(change_dilate_px=1))
+    assert wants(BlobConfig())  # the scenery test, on by default, reads it
+    off = BlobConfig(scenery_share=0.0)
+    assert not wants(off)  # the others are off by default: no mask, no cost
+    assert wants(dataclasses.replace(off, min_changed_share=0.3))
+    assert wants(dataclasses.replace(off, change_dilate_px=1))
 
 
 def test_the_foreground_mask_is_asked_for_by_whichever_stage_reads_it(small_recording):

@@ -384,6 +384,8 @@ class BackgroundModel:
         self._edges_frame = 0
         self._background: np.ndarray | None = None  # MOG2's background image, model size
         self._background_frame = 0
+        self._full_background: np.ndarray | None = None
+        self._full_background_frame = -1
         self._unlearnt = 0  # frames since the model last learnt (held back for people)
         self._was_background: np.ndarray | None = None  # uint8: last frame's background
         self._background_blocks: np.ndarray | None = None  # its 8x8 block means
@@ -402,13 +404,29 @@ class BackgroundModel:
         if self.learning:
             return None
         if self._edges is None or self.n_frames - self._edges_frame >= self.cfg.edges_every_frames:
-            image = self._background_image()
-            if self._small_size is not None:
-                image = cv2.resize(image, self.shape[::-1], interpolation=cv2.INTER_LINEAR)
+            image = self.background_image()
             self._edges = sobel_magnitude(cv2.cvtColor(image, cv2.COLOR_BGR2GRAY))
             self._edges.flags.writeable = False
             self._edges_frame = self.n_frames
         return self._edges
+
+    def background_image(self) -> np.ndarray | None:
+        """(H, W, 3) uint8 MOG2's background image at frame size, or None during the learning
+        phase. Read again every ``cfg.edges_every_frames`` frames (it changes slowly); until
+        then the same read-only array is returned, so callers can cache what they derive
+        from it by identity."""
+        if self.learning:
+            return None
+        image = self._background_image()
+        if self._full_background is None or self._full_background_frame != self._background_frame:
+            if self._small_size is not None:
+                image = cv2.resize(image, self.shape[::-1], interpolation=cv2.INTER_LINEAR)
+            else:
+                image = image.copy()
+            image.flags.writeable = False
+            self._full_background = image
+            self._full_background_frame = self._background_frame
+        return self._full_background
 
     def _background_image(self) -> np.ndarray:
         """(h, w, 3) uint8 MOG2's background image at the model's size, read again every

@@ -112,6 +112,30 @@ def _outside_band(
     return restored[comp] & ~inside
 
 
+def _at_silhouette_top(
+    blobs: np.ndarray,
+    labels: np.ndarray,
+    sil: np.ndarray,
+    centroids: np.ndarray,
+    silhouettes: Silhouettes,
+    cfg: BlobConfig,
+) -> np.ndarray:
+    """(len(blobs),) bool: which of ``blobs`` (0-based component indices) have their centroid
+    above ``cfg.scenery_min_rel_v`` of their majority silhouette's height, where a head is.
+    The closing takes scenery in between limbs and body, not above the head; a dark head
+    in front of a skin-coloured board, camouflaged, reads as unchanged scenery (three_people,
+    cam0)."""
+    out = np.zeros(len(blobs), bool)
+    for i, k in enumerate(blobs.tolist()):
+        under = sil[labels == k + 1]
+        lab = int(np.bincount(under).argmax()) if len(under) else 0
+        if lab > 0:
+            top = float(silhouettes.top_v_px[lab - 1])
+            height = max(float(silhouettes.bottom_v_px[lab - 1]) - top, 1.0)
+            out[i] = (centroids[k + 1, 1] - top) / height < cfg.scenery_min_rel_v
+    return out
+
+
 def _fill_missing_limbs(
     ok: np.ndarray, restored: np.ndarray, areas: np.ndarray, sil_of: np.ndarray
 ) -> np.ndarray:
@@ -387,12 +411,37 @@ def hand_ends(
     return out
 
 
+class SceneryMask:
+    """Skin-coloured scenery of one camera: its background model's background image
+    classified by the camera's skin model (``BlobConfig.scenery_share``). Classified again
+    only when the model reads a new background image (every ``edges_every_frames`` frames).
+    """
+
+    def __init__(self, skin_model: SkinModel) -> None:
+        self._skin_model = skin_model
+        self._image: np.ndarray | None = None
+        self._mask: np.ndarray | None = None
+
+    def mask(self, background: BackgroundModel) -> np.ndarray | None:
+        """(H, W) bool, read-only: where the background image is skin-coloured; None during
+        the learning phase."""
+        image = background.background_image()
+        if image is None:
+            return None
+        if image is not self._image:
+            self._image = image
+            self._mask = self._skin_model.classify(image)
+            self._mask.flags.writeable = False
+        return self._mask
+
+
 def extract_blobs(
     skin: np.ndarray,
     silhouettes: Silhouettes,
     cfg: BlobConfig,
     n_people_hint: int | None = None,
     bgr: np.ndarray | None = None,
+    scenery: np.ndarray | None = None,
 ) -> BlobSet:
     """Connected skin regions inside silhouettes, the ceil(lambda * 3 * N_h) largest.
 
@@ -407,6 +456,9 @@ def extract_blobs(
         filter, else dropped whole; and with it and ``silhouettes.background_edges``, ghosts
         of revealed background are dropped (:func:`revealed_background`,
         ``cfg.ghost_edge_ratio``)
+    scenery : (H, W) bool, optional -- where the background image is skin-coloured
+        (:class:`SceneryMask`); with it and ``silhouettes.changed``, blobs with at least
+        ``cfg.scenery_share`` of their pixels unchanged and on such scenery are dropped
 
     Returns
     -------
@@ -439,6 +491,7 @@ def extract_blobs(
         n_people_hint,
         None if bgr is None else bgr[region],
         _open_radius_px(cfg, skin.shape[1]),
+        None if scenery is None else scenery[region],
     )
     labels = np.zeros(skin.shape, np.int32)
     labels[region] = crop.labels
@@ -488,6 +541,7 @@ def _extract(
     n_people_hint: int | None,
     bgr: np.ndarray | None,
     radius_px: int,
+    scenery: np.ndarray | None = None,
 ) -> BlobSet:
     """:func:`extract_blobs` on one region (``radius_px``: the opening's, from the frame's
     width)."""
@@ -551,6 +605,16 @@ def _extract(
     if cfg.min_changed_share > 0 and silhouettes.changed is not None and len(ok):
         changed_share = pixel_share(labels, silhouettes.changed, n_all)
         ok = ok[changed_share[ok + 1] >= cfg.min_changed_share]
+    changed = silhouettes.changed
+    if cfg.scenery_share > 0 and scenery is not None and changed is not None and len(ok):
+        # the wooden table beside a hand: skin-coloured in the background image too, and
+        # unchanged to the model; a hand in front of it changes the pixels it covers
+        on_scenery = pixel_share(labels, scenery & ~changed, n_all)
+        flagged = ok[on_scenery[ok + 1] >= cfg.scenery_share]
+        if len(flagged):
+            ok = np.setdiff1d(
+                ok, flagged[~_at_silhouette_top(flagged, labels, sil, centroids, silhouettes, cfg)]
+            )
     edges = silhouettes.background_edges
     if cfg.ghost_edge_ratio > 0 and edges is not None and bgr is not None and len(ok):
         ghosts = revealed_background(

@@ -200,6 +200,23 @@ class BlobConfig:
         min=0.0,
         max=1.0,
     )
+    scenery_share: float = setting(
+        0.5,
+        "a blob is dropped when at least this share of its pixels are unchanged to the "
+        "background model (neither foreground nor shadow, before the clean-up) and skin-coloured "
+        "in its background image: skin-coloured scenery, such as a wooden table, that the "
+        "closing took into a silhouette (0 = no such test)",
+        min=0.0,
+        max=1.0,
+    )
+    scenery_min_rel_v: float = setting(
+        0.1,
+        "... except blobs whose centroid lies above this fraction of their silhouette's height "
+        "from its top, where the head is (a dark head in front of a skin-coloured board reads "
+        "as unchanged scenery)",
+        min=0.0,
+        max=1.0,
+    )
     ghost_edge_ratio: float = setting(
         0.45,
         "a blob is revealed background (a ghost: skin-coloured furniture under an object just "
@@ -275,7 +292,9 @@ class BlobConfig:
         """What this stage needs from ``BackgroundModel.step`` besides the silhouettes
         (``foreground_share``: a later stage reads ``BlobSet.foreground_share``)."""
         return {
-            "changed": self.change_dilate_px >= 0 or self.min_changed_share > 0,
+            "changed": self.change_dilate_px >= 0
+            or self.min_changed_share > 0
+            or self.scenery_share > 0,
             "foreground": foreground_share or self.min_foreground_share > 0,
             "background_edges": self.ghost_edge_ratio > 0,
         }

@@ -123,6 +123,29 @@ def test_background_edges_are_the_learnt_scenes_edges_refreshed_every_few_frames
 
 
 @pytest.mark.parametrize("scale", [1.0, 0.5])
+def test_background_image_is_the_learnt_scene_at_frame_size_shared_until_read_again(rng, scale):
+    cfg = BackgroundConfig(learning_frames=20, edges_every_frames=5, model_scale=scale)
+    model = BackgroundModel(cfg, (H, W))
+    base, frame = _scene(rng)  # grey left half, orange right half
+    for _ in range(20):
+        assert model.background_image() is None  # still learning
+        model.step(frame())
+    image = model.background_image()
+    assert image.shape == (H, W, 3) and image.dtype == np.uint8 and not image.flags.writeable
+    inner = np.s_[:, 10 : W // 2 - 10]  # away from the edge the downscale blurs
+    assert np.abs(image[inner].astype(int) - base[inner]).max() <= 6
+    img = frame()
+    img[30:90, 20:40] = (20, 200, 40)  # a person walks in: not part of the background
+    model.step(img)
+    assert model.background_image() is image  # the same array until read again
+    for _ in range(cfg.edges_every_frames):
+        model.step(img)
+    again = model.background_image()
+    assert again is not image
+    assert np.abs(again[50, 30].astype(int) - base[50, 30]).max() <= 6
+
+
+@pytest.mark.parametrize("scale", [1.0, 0.5])
 def test_shadow_is_background_only_inside_the_shadow_region(rng, scale):
     """A darkened patch of the same hue is a shadow where shadows may fall (the floor); in
     front of a wall it is a dark thing of the wall's hue (dark skin before a brown door)."""

@@ -446,3 +446,81 @@ def test_an_empty_restore_band_is_a_config_error_naming_the_table(tmp_path):
     path.write_text("[blobs]\nrestore_max_rel_v = 1.5\n")
     with pytest.raises(ConfigError, match="restore_max_rel_v must be <= 1"):
         load_pipeline_config(path)
+
+
+def _table_scene():
+    """A person's silhouette that the closing has grown over the edge of a skin-coloured
+    table (columns 65-79, rows 60-69: skin in the frame and in the background image,
+    unchanged to the background model), with a hand (rows 20-29) that changed the pixels
+    it covers."""
+    sil = _one_person()
+    skin = np.zeros((H, W), bool)
+    skin[20:30, 30:40] = True  # the hand
+    skin[60:70, 65:80] = True  # the table's edge
+    scenery = np.zeros((H, W), bool)
+    scenery[55:100, 55:120] = True  # the table in the background image
+    changed = np.zeros((H, W), bool)
+    changed[10:91, 20:60] = True  # the person; the table's edge is unchanged
+    sil = dataclasses.replace(sil, changed=changed)
+    return skin, sil, scenery
+
+
+def test_skin_coloured_scenery_that_the_closing_took_in_is_not_a_blob():
+    skin, sil, scenery = _table_scene()
+    cfg = BlobConfig(min_blob_area_px=10, silhouette_dilate_px=0, open_px=0)
+    assert cfg.scenery_share == 0.5  # on by default
+    kept = extract_blobs(skin, sil, cfg, scenery=scenery)
+    assert kept.centroids_px.tolist() == [[34.5, 24.5]]  # the hand alone
+    assert len(extract_blobs(skin, sil, cfg)) == 2  # no scenery mask: no test
+    off = dataclasses.replace(cfg, scenery_share=0.0)
+    assert len(extract_blobs(skin, sil, off, scenery=scenery)) == 2
+    # a hand held in front of the table changes what it covers: it stays a blob
+    changed = sil.changed.copy()
+    changed[60:70, 65:80] = True
+    held = dataclasses.replace(sil, changed=changed)
+    assert len(extract_blobs(skin, held, cfg, scenery=scenery)) == 2
+
+
+def test_a_camouflaged_head_at_the_silhouette_top_is_not_taken_for_scenery():
+    """A dark head in front of a skin-coloured board on the wall: skin in the frame and in
+    the background image, and unchanged to the model where it blends in. It sits at the
+    top of its silhouette, above scenery_min_rel_v, where the closing takes nothing in."""
+    skin, sil, scenery = _table_scene()
+    skin[11:19, 45:53] = True  # the head, rel_v 0.05
+    scenery[0:25, 40:60] = True  # the board behind it
+    cfg = BlobConfig(min_blob_area_px=10, silhouette_dilate_px=0, open_px=0)
+    changed = sil.changed.copy()
+    changed[11:19, 45:53] = False  # camouflaged: unchanged
+    sil = dataclasses.replace(sil, changed=changed)
+    kept = extract_blobs(skin, sil, cfg, scenery=scenery)
+    assert sorted(kept.centroids_px.tolist()) == [[34.5, 24.5], [48.5, 14.5]]  # hand, head
+    low = dataclasses.replace(cfg, scenery_min_rel_v=0.0)  # no head band: the head goes
+    assert extract_blobs(skin, sil, low, scenery=scenery).centroids_px.tolist() == [[34.5, 24.5]]
+
+
+def test_scenery_mask_classifies_each_background_image_once():
+    from surveil.blobs.extract import SceneryMask
+    from surveil.blobs.skin import default_skin_model
+
+    class Model:  # a background model whose image changes when it is read again
+        image = None
+
+        def background_image(self):
+            return self.image
+
+    class Counting:  # the default skin model, counting its calls
+        calls = 0
+
+        def classify(self, bgr):
+            self.calls += 1
+            return default_skin_model().classify(bgr)
+
+    skin, model = Counting(), Model()
+    scenery = SceneryMask(skin)
+    assert scenery.mask(model) is None  # learning: no background image yet
+    model.image = np.full((H, W, 3), (90, 120, 190), np.uint8)  # wood-coloured, BGR
+    first = scenery.mask(model)
+    assert first.shape == (H, W) and first.all() and not first.flags.writeable
+    assert scenery.mask(model) is first and skin.calls == 1
+    model.image = np.full((H, W, 3), 128, np.uint8)  # read again: a grey wall
+    assert not scenery.mask(model).any() and skin.calls == 2
