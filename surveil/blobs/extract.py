@@ -112,9 +112,26 @@ def _outside_band(
     return restored[comp] & ~inside
 
 
+def _scenery_shares(
+    blobs: np.ndarray,
+    labels: np.ndarray,
+    areas: np.ndarray,
+    scenery: np.ndarray,
+    changed: np.ndarray,
+) -> np.ndarray:
+    """(len(blobs),) share of each blob's pixels (``blobs``: 0-based component indices) that
+    are skin-coloured scenery unchanged to the background model. Counted over the blob
+    pixels only: the scenery mask is sparse there, so the count costs a fifth of a
+    :func:`pixel_share` over the region."""
+    on = (labels > 0) & scenery & ~changed
+    hits = np.bincount(labels[on], minlength=len(areas) + 1)
+    return hits[blobs + 1] / np.maximum(areas[blobs], 1)
+
+
 def _at_silhouette_top(
     blobs: np.ndarray,
     labels: np.ndarray,
+    stats: np.ndarray,
     sil: np.ndarray,
     centroids: np.ndarray,
     silhouettes: Silhouettes,
@@ -127,7 +144,9 @@ def _at_silhouette_top(
     cam0)."""
     out = np.zeros(len(blobs), bool)
     for i, k in enumerate(blobs.tolist()):
-        under = sil[labels == k + 1]
+        x, y, w, h = (int(v) for v in stats[k + 1, :4])
+        box = slice(y, y + h), slice(x, x + w)
+        under = sil[box][labels[box] == k + 1]
         lab = int(np.bincount(under).argmax()) if len(under) else 0
         if lab > 0:
             top = float(silhouettes.top_v_px[lab - 1])
@@ -609,11 +628,13 @@ def _extract(
     if cfg.scenery_share > 0 and scenery is not None and changed is not None and len(ok):
         # the wooden table beside a hand: skin-coloured in the background image too, and
         # unchanged to the model; a hand in front of it changes the pixels it covers
-        on_scenery = pixel_share(labels, scenery & ~changed, n_all)
-        flagged = ok[on_scenery[ok + 1] >= cfg.scenery_share]
+        flagged = ok[_scenery_shares(ok, labels, areas, scenery, changed) >= cfg.scenery_share]
         if len(flagged):
             ok = np.setdiff1d(
-                ok, flagged[~_at_silhouette_top(flagged, labels, sil, centroids, silhouettes, cfg)]
+                ok,
+                flagged[
+                    ~_at_silhouette_top(flagged, labels, stats, sil, centroids, silhouettes, cfg)
+                ],
             )
     edges = silhouettes.background_edges
     if cfg.ghost_edge_ratio > 0 and edges is not None and bgr is not None and len(ok):
