@@ -367,11 +367,13 @@ def facing_cues(
 def head_skin_share(
     head_m: np.ndarray, observation: CameraObservation, camera: Camera, radius_m: float
 ) -> float:
-    """Share of skin pixels (``observation.skin``) in the square of half-side ``radius_m``,
-    at the head's depth, around the head's projection into ``camera``: about half for a
-    face seen from the front, a little neck from behind (hair), in between from the side.
-    NaN where it says nothing: the head behind the camera, its square not wholly in the
-    image, or its projection off every silhouette.
+    """Share of skin pixels (``observation.skin``) among the person's (silhouette) pixels
+    in the square of half-side ``radius_m``, at the head's depth, around the head's
+    projection into ``camera``: about half for a face seen from the front, a little neck
+    from behind (hair), in between from the side. Skin-coloured scenery beside the head (a
+    cork board on the wall behind it) is not counted. NaN where it says nothing: the head
+    behind the camera, its square not wholly in the image, or its projection off every
+    silhouette.
     """
     px, depth = camera.project(np.asarray(head_m, dtype=np.float64)[None])
     if depth[0] <= 0:
@@ -385,7 +387,9 @@ def head_skin_share(
         return float("nan")
     if observation.silhouettes.labels[round(v), round(u)] == 0:
         return float("nan")
-    return float(observation.skin[v0:v1, u0:u1].mean())
+    person = observation.silhouettes.labels[v0:v1, u0:u1] > 0
+    face = observation.skin[v0:v1, u0:u1] & person
+    return np.count_nonzero(face) / np.count_nonzero(person)
 
 
 def face_cue(

@@ -184,6 +184,14 @@ def test_head_skin_share_counts_skin_around_the_head_and_abstains_where_it_canno
     seen = CameraObservation("cam0", obs["cam0"].silhouettes, skin, obs["cam0"].blobs)
     assert lab.head_skin_share(head, seen, cam, 0.1) == pytest.approx(0.5, abs=0.1)
     assert lab.head_skin_share(head, obs["cam0"], cam, 0.1) == 0.0  # hair only
+    # a skin-coloured board on the wall behind the head is not face: only the person's
+    # pixels count (three_people, cam0: the cork board behind p3)
+    board = obs["cam0"].silhouettes.labels == 0
+    behind = CameraObservation("cam0", obs["cam0"].silhouettes, board, obs["cam0"].blobs)
+    wide = 2.5 * r  # a square of half-side 0.25 m reaches above the head
+    square = board[round(v - wide) : round(v + wide) + 1, round(u - wide) : round(u + wide) + 1]
+    assert square.mean() > 0.2  # the board fills a good part of the square
+    assert lab.head_skin_share(head, behind, cam, 0.25) == 0.0
     # nobody there (off every silhouette), behind the camera, or cut by the image border
     assert np.isnan(lab.head_skin_share(np.array([4.5, 3.5, 1.7]), seen, cam, 0.1))
     assert np.isnan(lab.head_skin_share(cam.centre_m - [1.0, 1.0, 0.0], seen, cam, 0.1))
