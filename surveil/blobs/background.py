@@ -384,8 +384,7 @@ class BackgroundModel:
         self._edges_frame = 0
         self._background: np.ndarray | None = None  # MOG2's background image, model size
         self._background_frame = 0
-        self._full_background: np.ndarray | None = None
-        self._full_background_frame = -1
+        self._full_background: np.ndarray | None = None  # the same at frame size
         self._unlearnt = 0  # frames since the model last learnt (held back for people)
         self._was_background: np.ndarray | None = None  # uint8: last frame's background
         self._background_blocks: np.ndarray | None = None  # its 8x8 block means
@@ -418,14 +417,13 @@ class BackgroundModel:
         if self.learning:
             return None
         image = self._background_image()
-        if self._full_background is None or self._full_background_frame != self._background_frame:
+        if self._full_background is None:  # cleared whenever the model image is read again
             if self._small_size is not None:
                 image = cv2.resize(image, self.shape[::-1], interpolation=cv2.INTER_LINEAR)
             else:
                 image = image.copy()
             image.flags.writeable = False
             self._full_background = image
-            self._full_background_frame = self._background_frame
         return self._full_background
 
     def _background_image(self) -> np.ndarray:
@@ -435,6 +433,7 @@ class BackgroundModel:
         if self._background is None or stale:
             self._background = self._mog.getBackgroundImage()
             self._background_frame = self.n_frames
+            self._full_background = None
         return self._background
 
     def _compensate_gain(self, small: np.ndarray) -> np.ndarray:

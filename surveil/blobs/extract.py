@@ -91,6 +91,15 @@ def _majority_silhouette(
     return votes.argmax(axis=1).astype(np.int32)
 
 
+def _relative_v(v_px: np.ndarray, sil_labels: np.ndarray, silhouettes: Silhouettes) -> np.ndarray:
+    """rel_v = (v - top) / (bottom - top) of each row ``v_px`` in its silhouette
+    ``sil_labels`` (1-based; 0, no silhouette, is read as silhouette 1: callers mask it)."""
+    i = np.maximum(np.asarray(sil_labels), 1) - 1
+    top = np.asarray(silhouettes.top_v_px)[i]
+    bottom = np.asarray(silhouettes.bottom_v_px)[i]
+    return (v_px - top) / np.maximum(bottom - top, 1.0)
+
+
 def _outside_band(
     ok: np.ndarray,
     restored: np.ndarray,
@@ -105,9 +114,7 @@ def _outside_band(
     comp = ok + 1
     lab = sil_of[comp]
     has = lab > 0
-    top = np.asarray(silhouettes.top_v_px)[np.maximum(lab, 1) - 1]
-    bottom = np.asarray(silhouettes.bottom_v_px)[np.maximum(lab, 1) - 1]
-    rel_v = (centroids[comp, 1] - top) / np.maximum(bottom - top, 1.0)
+    rel_v = _relative_v(centroids[comp, 1], lab, silhouettes)
     inside = has & (rel_v >= cfg.restore_min_rel_v) & (rel_v <= cfg.restore_max_rel_v)
     return restored[comp] & ~inside
 
@@ -142,17 +149,14 @@ def _at_silhouette_top(
     The closing takes scenery in between limbs and body, not above the head; a dark head
     in front of a skin-coloured board, camouflaged, reads as unchanged scenery (three_people,
     cam0)."""
-    out = np.zeros(len(blobs), bool)
+    lab = np.zeros(len(blobs), np.int64)  # majority silhouette under each blob
     for i, k in enumerate(blobs.tolist()):
         x, y, w, h = (int(v) for v in stats[k + 1, :4])
         box = slice(y, y + h), slice(x, x + w)
         under = sil[box][labels[box] == k + 1]
-        lab = int(np.bincount(under).argmax()) if len(under) else 0
-        if lab > 0:
-            top = float(silhouettes.top_v_px[lab - 1])
-            height = max(float(silhouettes.bottom_v_px[lab - 1]) - top, 1.0)
-            out[i] = (centroids[k + 1, 1] - top) / height < cfg.scenery_min_rel_v
-    return out
+        lab[i] = np.bincount(under).argmax() if len(under) else 0
+    rel_v = _relative_v(centroids[blobs + 1, 1], lab, silhouettes)
+    return (lab > 0) & (rel_v < cfg.scenery_min_rel_v)
 
 
 def _fill_missing_limbs(
@@ -678,9 +682,9 @@ def _extract(
     else:  # voted already, over every component
         sil_of = sil_of_all[comp]
     cents = centroids[comp].astype(np.float64)
-    top = np.asarray(silhouettes.top_v_px)[sil_of - 1]
-    bottom = np.asarray(silhouettes.bottom_v_px)[sil_of - 1]
     if cfg.arm_length_rel > 0 and silhouettes.centres_px is not None:
+        top = np.asarray(silhouettes.top_v_px)[sil_of - 1]
+        bottom = np.asarray(silhouettes.bottom_v_px)[sil_of - 1]
         ys, xs = np.nonzero(sel)
         heights = bottom - top + 1.0
         shoulders = np.column_stack(
@@ -697,7 +701,7 @@ def _extract(
             cfg.arm_min_width_rel,
             cfg.hand_length_rel,
         )
-    rel_v = (cents[:, 1] - top) / np.maximum(bottom - top, 1.0)
+    rel_v = _relative_v(cents[:, 1], sil_of, silhouettes)
     out_labels = np.zeros(n_all, np.int32)
     out_labels[comp] = np.arange(1, len(comp) + 1, dtype=np.int32)
     return BlobSet(
