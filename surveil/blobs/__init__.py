@@ -1,7 +1,7 @@
 """Per-camera observations: silhouettes, skin and skin blobs (paper 004 sections 6.1-6.2)."""
 
 from surveil.blobs.background import BackgroundModel, silhouettes_from_mask
-from surveil.blobs.extract import blob_margin_px, extract_blobs, observe
+from surveil.blobs.extract import SceneryMask, blob_margin_px, extract_blobs, observe
 from surveil.blobs.settings import BackgroundConfig, BlobConfig, SkinConfig
 from surveil.blobs.skin import (
     SkinModel,
@@ -16,6 +16,7 @@ __all__ = [
     "BackgroundConfig",
     "BackgroundModel",
     "BlobConfig",
+    "SceneryMask",
     "SkinConfig",
     "SkinModel",
     "blob_margin_px",

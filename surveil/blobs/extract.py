@@ -723,9 +723,15 @@ def observe(
     cfg: BlobConfig,
     camera: str,
     n_people_hint: int | None = None,
+    scenery: SceneryMask | None = None,
 ) -> CameraObservation:
-    """One camera frame -> silhouettes (updating ``background_model``), skin, blobs."""
+    """One camera frame -> silhouettes (updating ``background_model``), skin, blobs; with
+    ``scenery`` (this camera's, kept between frames) blobs on skin-coloured scenery are
+    dropped as in a run (``cfg.scenery_share``)."""
     silhouettes = background_model.step(bgr, **cfg.background_requests())
     skin = skin_model.classify(bgr, silhouettes.boxes(blob_margin_px(cfg, bgr.shape[1])))
-    blobs = extract_blobs(skin, silhouettes, cfg, n_people_hint, bgr)
+    on_scenery = (
+        scenery.mask(background_model) if scenery is not None and cfg.scenery_share > 0 else None
+    )
+    blobs = extract_blobs(skin, silhouettes, cfg, n_people_hint, bgr, on_scenery)
     return CameraObservation(camera, silhouettes, skin, blobs)

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from surveil.blobs import BackgroundModel, observe
+from surveil.blobs import BackgroundModel, SceneryMask, observe
 from surveil.blobs.background import learning_frames_after, shadow_region
 from surveil.blobs.settings import BackgroundConfig, BlobConfig
 from surveil.carry import CarryAnalyser, CarryConfig
@@ -74,6 +74,7 @@ class _Observer:
     def __init__(self, rec: Recording) -> None:
         self.bg_cfg, self.blob_cfg = BackgroundConfig(), BlobConfig()
         self.skin = load_camera_skin_models(rec.rig_path, rec.camera_names)
+        self.scenery = {cam: SceneryMask(model) for cam, model in self.skin.items()}
         self.models: dict[str, BackgroundModel] = {}
         self.rig = rec.rig
         self.carry = CarryAnalyser(CarryConfig(), rec.rig)
@@ -92,7 +93,9 @@ class _Observer:
                 model = self.models[cam] = BackgroundModel(
                     self.bg_cfg, img.shape[:2], frames, shadow_region=region
                 )
-            out[cam] = observe(img, model, self.skin[cam], self.blob_cfg, cam, heads or None)
+            out[cam] = observe(
+                img, model, self.skin[cam], self.blob_cfg, cam, heads or None, self.scenery[cam]
+            )
         self._n_sets += 1
         if any(m.learning for m in self.models.values()):
             return out, {}  # as in the run: no carry analysis while the background learns

@@ -524,3 +524,34 @@ def test_scenery_mask_classifies_each_background_image_once():
     assert scenery.mask(model) is first and skin.calls == 1
     model.image = np.full((H, W, 3), 128, np.uint8)  # read again: a grey wall
     assert not scenery.mask(model).any() and skin.calls == 2
+
+
+def test_observe_drops_the_scenery_a_person_frames_with_the_cameras_scenery_mask(rng):
+    """A person whose arm and body frame a gap through which a wooden table shows: the
+    closing fills the gap, the table there is skin-coloured and unchanged, and ``observe``
+    with the camera's SceneryMask drops its blob, as a run does; without the mask the table
+    stays a blob (the review used to show it)."""
+    from surveil.blobs import BackgroundConfig, BackgroundModel, SceneryMask, observe
+    from surveil.blobs.skin import default_skin_model
+
+    h, w = 240, 320
+    room = np.full((h, w, 3), 110, np.uint8)
+    room[100:200, 120:240] = (90, 120, 190)  # the wooden table, BGR
+
+    def frame(img):
+        return np.clip(img + rng.normal(0, 2, img.shape), 0, 255).astype(np.uint8)
+
+    person = room.copy()
+    person[60:220, 130:190] = (40, 60, 30)  # dark green clothes
+    person[140:146, 157:163] = room[140:146, 157:163]  # the gap: table seen through it
+    skin = default_skin_model()
+    cfg = BlobConfig()
+    kept = {}
+    for name, scenery in (("with mask", SceneryMask(skin)), ("without", None)):
+        model = BackgroundModel(BackgroundConfig(learning_frames=20), (h, w))
+        for _ in range(20):
+            observe(frame(room), model, skin, cfg, "cam0", 1, scenery)
+        obs = observe(frame(person), model, skin, cfg, "cam0", 1, scenery)
+        gap = obs.blobs.labels[140:146, 157:163]
+        kept[name] = bool(gap.any())
+    assert kept == {"with mask": False, "without": True}
