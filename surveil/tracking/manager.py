@@ -23,6 +23,7 @@ same output. Same for ``reset()``.
 
 from __future__ import annotations
 
+import itertools
 import logging
 from collections import deque
 from collections.abc import Mapping
@@ -774,9 +775,9 @@ class MultiTargetTracker:
         lc = self.cfg.lifecycle
         out: set[int] = set()
         parted: set[int] = set()
-        free = [
-            i for i, sd in enumerate(seeds) if i not in used and sd.count >= lc.init_confirm_frames
-        ]
+        # strong seeds, confirmed or not: an unconfirmed one only ever parts a pair together
+        # with a confirmed one (:meth:`_both_leaving`)
+        free = [i for i, sd in enumerate(seeds) if i not in used and sd.count > 0]
         for tr in self._tracks.values():
             if tr.phase is not Phase.COMBINED or tr.partner not in self._tracks or not free:
                 continue
@@ -797,20 +798,60 @@ class MultiTargetTracker:
             for j in np.flatnonzero(ok):
                 seed = seeds[free[j]]
                 ok[j] = not self._there_as_pair_joined(tr, seed.position_m, seed.first_ns)
-            if not ok.any():
+            confirmed = np.array([seeds[i].count >= lc.init_confirm_frames for i in free])
+            if not (ok & confirmed).any():
                 continue
-            k = int(np.argmin(np.where(ok, d0, np.inf)))
-            idx = free.pop(k)
-            seed = seeds[idx]
-            self._part(
-                (tr, other),
-                np.array([tr.mean_m, seed.position_m]),
-                np.array([tr.vel_mps, seed.velocity_mps]),
-            )
-            out.add(idx)
+            both = self._both_leaving(tr, heads, [seeds[free[j]] for j in np.flatnonzero(ok)])
+            if both is not None:
+                picked = [free[j] for j in np.flatnonzero(ok)[list(both)]]
+                modes = np.array([seeds[i].position_m for i in picked])
+                vels = np.array([seeds[i].velocity_mps for i in picked])
+            else:
+                picked = [free[int(np.argmin(np.where(ok & confirmed, d0, np.inf)))]]
+                seed = seeds[picked[0]]
+                modes = np.array([tr.mean_m, seed.position_m])
+                vels = np.array([tr.vel_mps, seed.velocity_mps])
+            free = [i for i in free if i not in picked]
+            self._part((tr, other), modes, vels)
+            out.update(picked)
             parted.update((tr.id, other.id))
-            log.debug("t%d / t%d part on a new candidate at %s", tr.id, other.id, seed.position_m)
+            log.debug("t%d / t%d part on new candidates at %s", tr.id, other.id, modes)
         return out
+
+    def _both_leaving(
+        self, pair: _Track, heads: np.ndarray | None, seeds: list[_Pending]
+    ) -> tuple[int, int] | None:
+        """Two of ``seeds`` (those a combined pair may part on) that are both of its targets,
+        leaving at once, or None. At least one of the two must be confirmed.
+
+        Two hands that part fast can both outrun the pair: it stays where they met, held
+        there by a ghost where their lines of sight cross (handshake, seeds 0, 2 and 5 at
+        10.1 s), and both hands' candidates become seeds in the same frame set. Parted onto
+        one of them, the pair's estimate (the ghost) would be the other mode and the second
+        hand would get a new tracker. Two seeds on opposite sides of the pair (their
+        directions from it more than 90 degrees apart) whose owners can reach them (the
+        owner rule, :func:`lab.owner_rule`, for two people's hands) are taken as both
+        targets: the nearest such two."""
+        if len(seeds) < 2:
+            return None
+        reach = self.cfg.labelling.arm_reach_m + self.cfg.labelling.person_margin_m
+        pts = np.array([sd.position_m for sd in seeds])
+        away = pts - pair.mean_m
+        best, best_d = None, np.inf
+        confirmed = [sd.count >= self.cfg.lifecycle.init_confirm_frames for sd in seeds]
+        for a, b in itertools.combinations(range(len(seeds)), 2):
+            if float(away[a] @ away[b]) >= 0 or not (confirmed[a] or confirmed[b]):
+                continue
+            if heads is not None:
+                owners = lab.owner_rule(pts[[a, b]], heads, 0.0)
+                assert owners is not None  # a zero margin always decides
+                to_head = np.linalg.norm(pts[[a, b]][list(owners[0])] - heads, axis=1)
+                if (to_head > reach).any():
+                    continue
+            d = float(np.linalg.norm(away[a]) + np.linalg.norm(away[b]))
+            if d < best_d:
+                best, best_d = (a, b), d
+        return best
 
     def _part(
         self,
@@ -1127,7 +1168,10 @@ class MultiTargetTracker:
         as a prior (section 5.2): it may take a confirmed seed within a gate around that
         position (``reacquire_gate_m``, growing by ``reacquire_speed_mps`` per second lost,
         at most ``reacquire_max_m``), or any seed, confirmed or not, within
-        ``reacquire_near_m`` of it. Lost trackers and seeds are matched jointly by least
+        ``reacquire_near_m`` of it. A person's hand's gate grows by
+        ``reacquire_hand_speed_mps`` per second since the hand was last supported: a hand
+        swung faster than its tracker can follow is lost a few frame sets later and far from
+        where it was last supported. Lost trackers and seeds are matched jointly by least
         total distance (Hungarian), so two targets lost together are not swapped greedily."""
         lc = self.cfg.lifecycle
         lost = [tr for tr in self._tracks.values() if tr.phase is Phase.LOST]
@@ -1137,8 +1181,12 @@ class MultiTargetTracker:
         sp = np.array([sd.position_m for sd in seeds])
         confirmed = np.array([sd.seen >= lc.init_confirm_frames for sd in seeds])
         d = np.linalg.norm(last[:, None] - sp[None], axis=2)
-        lost_s = np.array([(t_ns - (tr.lost_since_ns or t_ns)) * 1e-9 for tr in lost])
-        gate = self._reacquire_gate_m(lost_s)
+        hands = np.array([tr.limb.is_hand and tr.person > 0 for tr in lost])
+        since = [
+            tr.last_good_ns if hand else (tr.lost_since_ns or t_ns)
+            for tr, hand in zip(lost, hands, strict=True)
+        ]
+        gate = self._reacquire_gate_m((t_ns - np.array(since)) * 1e-9, hands)
         ok = (d <= gate[:, None]) & (confirmed[None] | (d <= lc.reacquire_near_m))
         if lc.reacquire_own_body:
             ok &= ~self._claimed_by_others(lost, sp)
@@ -1198,13 +1246,15 @@ class MultiTargetTracker:
                 return hm.copy()
         return head.mean_m.copy()
 
-    def _reacquire_gate_m(self, unseen_s: float | np.ndarray) -> float | np.ndarray:
+    def _reacquire_gate_m(
+        self, unseen_s: float | np.ndarray, hand: bool | np.ndarray = False
+    ) -> float | np.ndarray:
         """How far from its last position a lost target may be re-acquired after ``unseen_s``:
-        ``reacquire_gate_m`` growing by ``reacquire_speed_mps``, at most ``reacquire_max_m``."""
+        ``reacquire_gate_m`` growing by ``reacquire_speed_mps`` (``reacquire_hand_speed_mps``
+        where ``hand``), at most ``reacquire_max_m``."""
         lc = self.cfg.lifecycle
-        return np.minimum(
-            lc.reacquire_gate_m + lc.reacquire_speed_mps * unseen_s, lc.reacquire_max_m
-        )
+        speed = np.where(hand, lc.reacquire_hand_speed_mps, lc.reacquire_speed_mps)
+        return np.minimum(lc.reacquire_gate_m + speed * unseen_s, lc.reacquire_max_m)
 
     def _merge_lost(
         self,
@@ -1261,7 +1311,7 @@ class MultiTargetTracker:
                 tr
                 for tr in lost
                 if np.linalg.norm(sp - tr.last_good_m, axis=1).min()
-                > self._reacquire_gate_m((t_ns - tr.last_good_ns) * 1e-9)
+                > self._reacquire_gate_m((t_ns - tr.last_good_ns) * 1e-9, True)
             ]
         if not lost or not live:
             return {}

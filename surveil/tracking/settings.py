@@ -247,9 +247,18 @@ class LifecycleConfig:
         max=1.0,
     )
     reacquire_speed_mps: float = setting(
-        0.5, "the re-acquisition gate grows by this per second lost, m/s", min=0.0
+        0.5,
+        "the re-acquisition gate grows by this per second lost, m/s",
+        min=0.0,
     )
-    reacquire_max_m: float = setting(0.8, "the re-acquisition gate never exceeds this, m", min=0.0)
+    reacquire_hand_speed_mps: float = setting(
+        2.0,
+        "... but a person's hand's gate grows by this per second since it was last supported: "
+        "a hand swung at 2-3 m/s outruns its tracker and is lost 0.2-0.4 s later, 0.4-1.0 m "
+        "from where it was last supported, m/s",
+        min=0.0,
+    )
+    reacquire_max_m: float = setting(1.0, "the re-acquisition gate never exceeds this, m", min=0.0)
     reacquire_with_body: bool = setting(
         True,
         "a lost hand of a person whose head is tracked is re-acquired around its last position "

@@ -825,6 +825,46 @@ def test_a_ghost_beside_shaking_hands_does_not_take_a_hand_away(rig, rng):
     _assert_right_hands_owned(out[-1], a, b)
 
 
+@pytest.mark.parametrize(("b_later", "both"), [(0, True), (1, True), (3, False)])
+def test_two_hands_that_leave_a_pair_at_once_both_part_it(rig, rng, b_later, both):
+    """After a handshake both hands go home fast, unseen for three frame sets, while a ghost
+    (their lines of sight crossing) holds the pair where they met (bundled handshake scene,
+    seeds 0, 2 and 5 at 10.1 s). Both hands' candidates then show 49 cm from the pair on
+    opposite sides (beyond separate_gate_m: not modes of the pair). When a's seed is
+    confirmed and b's shows too (``b_later`` 0: confirmed in the same frame set; 1: one
+    frame set behind), the pair parts onto the two of them: each hand keeps its tracker and
+    label, and no tracker starts on either hand. When b's hand shows only once a's seed has
+    parted the pair (3), one tracker keeps the ghost and b's hand gets a new tracker."""
+    frames, a, b, meet = shaking_hands(hold=6)
+    n_before = len(frames)
+    path = {"a": [], "b": []}
+    for k in range(24):
+        pts = [*_head_and_left(a), *_head_and_left(b)] + ([meet] if k < 12 else [])
+        for name, p, shown in (("a", a, 3), ("b", b, 3 + b_later)):
+            u = min(1.0, 0.8 + 0.04 * (k - 3))
+            hand = meet + u * (p["right_hand"] - meet)
+            if k >= shown:
+                pts.append(hand)
+            path[name].append(hand)
+        frames.append(pts)
+    out = run(MultiTargetTracker(TrackingConfig(), rig, seed=11), frames, rng)
+    before = {s.label: s.target_id for s in out[n_before - 1].targets}
+    starts = [t for f in out[n_before:] for t in f.transitions if t.old is Phase.UNINITIALISED]
+    on_hands = [
+        t
+        for t in starts
+        if min(np.linalg.norm(t.position_m - path[n][i]) for n in "ab" for i in range(24)) < 0.05
+    ]
+    after = {s.label: s for s in out[-1].targets}
+    if both:
+        assert not on_hands
+        _assert_right_hands_owned(out[-1], a, b)
+        for label in ("p1/right_hand", "p2/right_hand"):
+            assert after[label].target_id == before[label]
+    else:
+        assert len(on_hands) == 1
+
+
 @pytest.mark.parametrize("frames_out", [3, 0])
 def test_a_pair_that_follows_one_hand_out_of_the_others_reach_parts(rig, rng, frames_out):
     """After a handshake b's hand goes home and a's hand is never seen again: the pair has no
@@ -1433,6 +1473,38 @@ def test_hands_held_near_each_other_that_never_met_are_parted_where_they_were(ri
     else:
         assert not parts
         assert all(s.phase is Phase.COMBINED for s in out[-1].targets if "right" in s.label)
+
+
+@pytest.mark.parametrize("hand_speed_mps, back", [(2.0, True), (0.5, False)])
+def test_a_hand_that_outran_its_tracker_is_reacquired_where_it_went(
+    rig, rng, hand_speed_mps, back
+):
+    """p1's left hand swings 0.54 m forward and up in 0.2 s (2.7 m/s; demo, p2's left hand at
+    9.7-10.0 s): its tracker cannot follow, the hand's candidate goes unexplained for three
+    frame sets and the tracker is lost. The hand's new candidate is re-acquired by the lost
+    tracker once the gate has grown at a hand's speed since the hand was last supported;
+    grown at reacquire_speed_mps from the moment of loss it stays short and a new tracker
+    takes the hand (an identity switch)."""
+    frames = two_people_frames(80, b_from=0)
+    rest = frames[44][1]
+    went = rest + [0.45, 0.0, 0.3]
+    for i in range(45, 80):
+        frames[i][1] = rest + min(1.0, (i - 44) / 3) * (went - rest)
+    sets = [
+        candidates([p for k, p in enumerate(pts) if k != 1 or not 45 <= i <= 47], rng)
+        for i, pts in enumerate(frames)
+    ]
+    cfg = TrackingConfig(
+        lifecycle=LifecycleConfig(retire_unclaimed_s=0.0, reacquire_hand_speed_mps=hand_speed_mps)
+    )
+    trk = MultiTargetTracker(cfg, rig, seed=4)
+    out = [trk.step(i * DT_NS, cs) for i, cs in enumerate(sets)]
+    hand = next(s.target_id for s in out[44].targets if s.label == "p1/left_hand")
+    assert {s.target_id: s.phase for s in out[47].targets}[hand] is Phase.LOST
+    now = {s.label: s for s in out[-1].targets}
+    assert np.linalg.norm(now["p1/left_hand"].mean_m - went) < 0.03
+    assert (now["p1/left_hand"].target_id == hand) is back
+    assert len({s.target_id for f in out for s in f.targets}) == (6 if back else 7)
 
 
 @pytest.mark.parametrize("own_body", [True, False])
