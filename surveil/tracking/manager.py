@@ -1960,8 +1960,8 @@ class MultiTargetTracker:
                 tr.misses = 0
             elif old is Phase.LOST and new is Phase.UNLABELLED:
                 if tid in merged:
-                    met = self._tracks[merged[tid]]
-                    self._reinit(tr, met.mean_m, met.vel_mps)
+                    onto = self._tracks[merged[tid]]
+                    self._reinit(tr, onto.mean_m, onto.vel_mps)
                 else:
                     self._reinit(tr, self._pending[reacquired[tid]].position_m, np.zeros(3))
                 tr.lost_since_ns = None
