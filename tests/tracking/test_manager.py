@@ -1307,6 +1307,15 @@ def test_a_still_hand_whose_candidate_flickers_is_reacquired_at_once_near_its_la
     assert len({s.target_id for f in out for s in f.targets}) == 6  # no new tracker
 
 
+def _left_hand_run(rig, sets, **lifecycle) -> tuple[list[TrackFrame], int]:
+    """Two people's candidate sets through a tracker (tracker seed 4, lone trackers never
+    retired, ``lifecycle`` settings): its frames and the id p1's left hand had at frame 44."""
+    cfg = TrackingConfig(lifecycle=LifecycleConfig(retire_unclaimed_s=0.0, **lifecycle))
+    trk = MultiTargetTracker(cfg, rig, seed=4)
+    out = [trk.step(i * DT_NS, cs) for i, cs in enumerate(sets)]
+    return out, next(s.target_id for s in out[44].targets if s.label == "p1/left_hand")
+
+
 @pytest.mark.parametrize("weak_min, back", [(0.2, True), (0.3, False)])
 def test_a_lost_hand_is_reacquired_by_a_weak_candidate_near_its_last_position(
     rig, rng, weak_min, back
@@ -1323,12 +1332,7 @@ def test_a_lost_hand_is_reacquired_by_a_weak_candidate_near_its_last_position(
             weak = back_at + rng.normal(0, 0.005, 3)
             cs = CandidateSet(np.vstack([cs.points_m, weak]), np.append(cs.prior, 0.25))
         sets.append(cs)
-    cfg = TrackingConfig(
-        lifecycle=LifecycleConfig(retire_unclaimed_s=0.0, reacquire_prior_min=weak_min)
-    )
-    trk = MultiTargetTracker(cfg, rig, seed=4)
-    out = [trk.step(i * DT_NS, cs) for i, cs in enumerate(sets)]
-    hand = next(s.target_id for s in out[44].targets if s.label == "p1/left_hand")
+    out, hand = _left_hand_run(rig, sets, reacquire_prior_min=weak_min)
     assert {s.target_id: s.phase for s in out[59].targets}[hand] is Phase.LOST
     last = {s.target_id: s for s in out[89].targets}[hand]
     if back:  # its last position is the prior that makes a weak candidate enough
@@ -1494,12 +1498,7 @@ def test_a_hand_that_outran_its_tracker_is_reacquired_where_it_went(
         candidates([p for k, p in enumerate(pts) if k != 1 or not 45 <= i <= 47], rng)
         for i, pts in enumerate(frames)
     ]
-    cfg = TrackingConfig(
-        lifecycle=LifecycleConfig(retire_unclaimed_s=0.0, reacquire_hand_speed_mps=hand_speed_mps)
-    )
-    trk = MultiTargetTracker(cfg, rig, seed=4)
-    out = [trk.step(i * DT_NS, cs) for i, cs in enumerate(sets)]
-    hand = next(s.target_id for s in out[44].targets if s.label == "p1/left_hand")
+    out, hand = _left_hand_run(rig, sets, reacquire_hand_speed_mps=hand_speed_mps)
     assert {s.target_id: s.phase for s in out[47].targets}[hand] is Phase.LOST
     now = {s.label: s for s in out[-1].targets}
     assert np.linalg.norm(now["p1/left_hand"].mean_m - went) < 0.03
