@@ -247,9 +247,7 @@ class LifecycleConfig:
         max=1.0,
     )
     reacquire_speed_mps: float = setting(
-        0.5,
-        "the re-acquisition gate grows by this per second lost, m/s",
-        min=0.0,
+        0.5, "the re-acquisition gate grows by this per second lost, m/s", min=0.0
     )
     reacquire_hand_speed_mps: float = setting(
         2.0,
