@@ -16,6 +16,13 @@ recording's own (slightly wrong) calibration, and reports against the ground tru
   candidates (medians). Skin is classified only near the silhouettes and their distances
   capped, as in a run (since session 70; before, skin was classified over the whole frame,
   which timed skin at about 1.8 ms per camera frame where a run spends about 0.3-0.5).
+
+The front end here has no tracker, so it chooses blobs for N_h = each view's own silhouette
+count; where people merge into one silhouette in a view, that view keeps too few blobs.
+``--in-run`` adds a second table scored the same way on the candidates a run of
+``surveil run`` wrote (``/candidates`` of ``pipeline_bench.py``'s MCAP for ``--seed``, run
+first when missing or with ``--rerun``): there N_h is also the tracked heads, and the
+trackers' predictions feed back into the background model and the explaining away.
 """
 
 from __future__ import annotations
@@ -28,14 +35,67 @@ from pathlib import Path
 import cv2
 import numpy as np
 from front_end import observe_recording
-from pipeline_bench import add_scene_arguments, render, scene_names
+from pipeline_bench import add_scene_arguments, bench, output_path, render, scene_names
 
+from surveil.eval.score import align_frames
 from surveil.io.ground_truth import MaskClass, load_ground_truth
+from surveil.io.mcap_reader import read_run
 from surveil.io.recording import open_recording
 from surveil.pipeline import PipelineConfig, load_pipeline_config
 from surveil.recon.candidates import make_candidates
 
 ROOT = Path(__file__).resolve().parents[1]
+
+
+class CandidateScore:
+    """Candidates against the true heads and hands, accumulated over frame sets."""
+
+    def __init__(self) -> None:
+        self.found50 = self.found100 = self.countable = self.false = self.n_sets = 0
+        self.dists: list[float] = []
+
+    def add(self, points_m: np.ndarray, truth_m: np.ndarray, n_views: np.ndarray) -> None:
+        """One frame set: candidates (K, 3) and every true limb's position (L, 3; NaN where
+        absent) and number of cameras that see it (L,)."""
+        self.n_sets += 1
+        present = np.isfinite(truth_m).all(axis=1)
+        seen2 = present & (n_views >= 2)
+        self.countable += int(seen2.sum())
+        if not len(points_m):
+            return
+        d = np.linalg.norm(points_m[:, None, :] - truth_m[None, present, :], axis=2)
+        nearest_true = d.min(axis=0)  # per true limb
+        self.found50 += int((nearest_true[seen2[present]] < 0.05).sum())
+        self.found100 += int((nearest_true[seen2[present]] < 0.10).sum())
+        self.false += int((d.min(axis=1) > 0.10).sum())
+        self.dists.extend(nearest_true[nearest_true < 0.10].tolist())
+
+    def summary(self) -> dict[str, float]:
+        return {
+            "recall50": self.found50 / max(self.countable, 1),
+            "recall100": self.found100 / max(self.countable, 1),
+            "false_per_set": self.false / max(self.n_sets, 1),
+            "limbs_per_set": self.countable / max(self.n_sets, 1),
+            "mean_mm": 1000 * float(np.mean(self.dists)) if self.dists else float("nan"),
+        }
+
+
+def score_run(rec_dir: Path, mcap: Path, learning_frames: int) -> dict[str, float]:
+    """:class:`CandidateScore` of the candidates a run wrote (its ``/candidates``), frame
+    sets after the background models' learning phase."""
+    gt = load_ground_truth(rec_dir)
+    run = read_run(mcap)
+    rows = align_frames(gt.t_ns, run.candidate_t_ns, gt.fps)
+    by_frame = np.bincount(run.candidate_frame, minlength=len(run.candidate_t_ns))
+    starts = np.concatenate([[0], np.cumsum(by_frame)])
+    order = np.argsort(run.candidate_frame, kind="stable")
+    score = CandidateScore()
+    for m, g in enumerate(rows):
+        if g < 0 or gt.frames[g] < learning_frames:
+            continue
+        points = run.candidate_pos_m[order[starts[m] : starts[m + 1]]]
+        score.add(points, gt.positions_m[g], gt.n_views[g])
+    return score.summary()
 
 
 def bench_recording(
@@ -46,8 +106,7 @@ def bench_recording(
     cfg = cfg or PipelineConfig()
     bg_cfg, cand_cfg = cfg.background, cfg.candidates
     times: dict[str, list[float]] = {"background": [], "skin": [], "blobs": [], "candidates": []}
-    found50 = found100 = countable = false = n_sets = 0
-    dists: list[float] = []
+    score = CandidateScore()
     tp = fp = fn = 0
     frames = observe_recording(rec, cfg, max_frames=max_frames, skin_near_people=True)
     for fs, by_cam, cam_times in frames:
@@ -67,28 +126,10 @@ def bench_recording(
         times["candidates"].append(time.perf_counter() - t0)
         if fs.index < bg_cfg.learning_frames:
             continue  # the background model is still learning
-        n_sets += 1
         i = int(np.searchsorted(gt.frames, fs.index))
-        truth_pos = gt.positions_m[i]
-        present = np.isfinite(truth_pos).all(axis=1)
-        seen2 = present & (gt.n_views[i] >= 2)
-        if len(cands.points_m):
-            d = np.linalg.norm(cands.points_m[:, None, :] - truth_pos[None, present, :], axis=2)
-            nearest_true = d.min(axis=0)  # per true limb
-            countable += int(seen2.sum())
-            found50 += int((nearest_true[seen2[present]] < 0.05).sum())
-            found100 += int((nearest_true[seen2[present]] < 0.10).sum())
-            nearest_cand = d.min(axis=1)
-            false += int((nearest_cand > 0.10).sum())
-            dists.extend(nearest_true[nearest_true < 0.10].tolist())
-        else:
-            countable += int(seen2.sum())
+        score.add(cands.points_m, gt.positions_m[i], gt.n_views[i])
     return {
-        "recall50": found50 / max(countable, 1),
-        "recall100": found100 / max(countable, 1),
-        "false_per_set": false / max(n_sets, 1),
-        "limbs_per_set": countable / max(n_sets, 1),
-        "mean_mm": 1000 * float(np.mean(dists)) if dists else float("nan"),
+        **score.summary(),
         "skin_precision": tp / max(tp + fp, 1),
         "skin_recall": tp / max(tp + fn, 1),
         **{f"{k}_ms": 1000 * float(np.median(v)) for k, v in times.items()},
@@ -103,6 +144,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--config", type=Path, default=None, help="pipeline settings (TOML) instead of defaults"
     )
+    parser.add_argument(
+        "--in-run",
+        action="store_true",
+        help="also score the candidates of a run (pipeline_bench.py's MCAP, N_h from tracked "
+        "heads)",
+    )
+    parser.add_argument("--seed", type=int, default=0, help="tracker seed of that run")
+    parser.add_argument("--rerun", action="store_true", help="run the pipeline again")
     args = parser.parse_args(argv)
     cfg = load_pipeline_config(args.config)
     print(
@@ -121,6 +170,23 @@ def main(argv: list[str] | None = None) -> int:
             f"| {r['candidates_ms']:.2f} |",
             flush=True,
         )
+    if args.in_run:
+        print(
+            f"\nIn a run (tracker seed {args.seed}: N_h from the tracked heads, the trackers' "
+            "feedback):\n"
+        )
+        print("| scenario | recall 50 mm | recall 100 mm | false / set | true limbs / set |")
+        print("|---|---|---|---|---|")
+        for name in scene_names(args):
+            mcap = output_path(args.out, name, args.config, args.seed)
+            if args.rerun or not mcap.exists():
+                bench(name, args.out, args.seed, args.config)
+            r = score_run(args.out / name, mcap, cfg.background.learning_frames)
+            print(
+                f"| {name} | {r['recall50']:.3f} | {r['recall100']:.3f} "
+                f"| {r['false_per_set']:.2f} | {r['limbs_per_set']:.2f} |",
+                flush=True,
+            )
     return 0
 
 
