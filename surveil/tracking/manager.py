@@ -146,6 +146,7 @@ class _Track:
     partner: int | None = None
     joined_ns: int | None = None  # when it entered its current combined state
     joined_m: np.ndarray | None = None  # its estimate then
+    joined_others_m: np.ndarray | None = None  # (K, 3) other labelled targets' estimates then
     joined_apart: bool = False  # it combined while combine_distance_m or more from its partner
     unjoin_frames: int = 0  # consecutive frame sets whose modes say the pair never met
     body_fails: int = 0  # frame sets in which it failed the body check (a head candidate)
@@ -741,7 +742,11 @@ class MultiTargetTracker:
         leaving the pair but something that stood beside it (a ghost from skin-coloured
         clothes beside shaking hands). A seed whose present run began that early is not
         judged: its own steady evidence says the joining was not of two targets (a tracker
-        that slid onto the other's hand while its own went home)."""
+        that slid onto the other's hand while its own went home). Also true if another
+        labelled target's estimate (normal) was within ``init_gate_m`` of ``seed_m`` when
+        the pair joined (``joined_others_m``): that target stood there, and its tracker has
+        drifted off it since. (Not an unlabelled tracker's: one left over where a hand
+        rested before it reached out marks that hand's home, where it comes back.)"""
         lc = self.cfg.lifecycle
         if pair.joined_ns is None or pair.joined_m is None:
             return False
@@ -754,6 +759,13 @@ class MultiTargetTracker:
                 break
             if t_ns > start_ns and (np.linalg.norm(pts - seed_m, axis=1) <= lc.init_gate_m).any():
                 return True
+        others = pair.joined_others_m
+        if (
+            others is not None
+            and (np.linalg.norm(others - seed_m, axis=1) <= lc.init_gate_m).any()
+        ):
+            log.debug("t%d: a tracker stood at %s as the pair joined", pair.id, seed_m.round(2))
+            return True
         return False
 
     def _split_on_seeds(self, seeds: list[_Pending], used: set[int]) -> set[int]:
@@ -1933,6 +1945,13 @@ class MultiTargetTracker:
                 partner_id = pairs[tid]
                 tr.partner = partner_id
                 tr.joined_ns, tr.joined_m = t_ns, tr.mean_m.copy()
+                tr.joined_others_m = np.array(
+                    [
+                        o.mean_m
+                        for o in self._tracks.values()
+                        if o.phase is Phase.NORMAL and o.labelled and o.id not in (tid, partner_id)
+                    ]
+                ).reshape(-1, 3)
                 tr.out_of_reach_frames = 0
                 gap = float(np.linalg.norm(tr.mean_m - self._tracks[partner_id].mean_m))
                 tr.joined_apart = gap >= lc.combine_distance_m
@@ -1946,7 +1965,7 @@ class MultiTargetTracker:
                     self._separate(tr, self._tracks[partner_id], met)
                     separated_done.update((tid, partner_id))
                 tr.partner = None
-                tr.joined_ns = tr.joined_m = None
+                tr.joined_ns = tr.joined_m = tr.joined_others_m = None
                 tr.joined_apart, tr.unjoin_frames = False, 0
                 tr.out_of_reach_frames = 0
                 tr.before_vec_m = None

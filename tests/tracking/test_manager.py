@@ -970,6 +970,54 @@ def test_a_ghost_that_stood_beside_the_hands_as_they_joined_does_not_part_them(
         assert min(splits) < joined[1]
 
 
+def test_a_hand_whose_tracker_drifted_off_it_does_not_part_a_pair(rig, rng):
+    """Two people shake right hands. While the hands are joined, b's resting left hand loses
+    its candidate to one 35 cm above it (a blob pair on b's shirt) and its tracker follows it
+    up; then the hand's own candidate shows again. That seed is where b's left-hand tracker
+    stood as the pair joined, so it is not a hand leaving the pair: the pair stays combined
+    until the hands part and each right hand keeps its owner's label (bundled handshake
+    scene, seed 3, 4.33 s; without the rule the pair parts onto the seed there and then, and
+    the hands' labels go wrong)."""
+    frames, a, b, meet = shaking_hands(hold=30)
+    rest = _head_and_left
+    b["left_hand"] = b["left_hand"] + [-0.08, 0.05, 0.0]  # 53 cm from where the hands meet
+    up = np.array([0.0, 0.0, 0.35])
+    drift, back = 58, 66  # the slide begins; the hand's own candidate shows again
+    for k in range(len(frames)):
+        u = min(max(k - drift + 1, 0) / 6, 1.0)
+        shown = [b["left_hand"] + u * up] + ([b["left_hand"]] if k >= back else [])
+        frames[k] = [*rest(a), b["head"], *shown, *frames[k][4:]]
+    for u in np.linspace(0, 1, 7)[1:]:
+        frames.append(
+            [
+                *rest(a),
+                b["head"],
+                b["left_hand"] + up,
+                b["left_hand"],
+                meet + u * (a["right_hand"] - meet),
+                meet + u * (b["right_hand"] - meet),
+            ]
+        )
+    hands_part = len(frames) - 6
+    frames += [
+        [
+            *rest(a),
+            a["right_hand"],
+            b["head"],
+            b["left_hand"] + up,
+            b["left_hand"],
+            b["right_hand"],
+        ]
+        for _ in range(20)
+    ]
+    out = run(MultiTargetTracker(TrackingConfig(), rig, seed=15), frames, rng)
+    joined = [i for i, f in enumerate(out) for t in f.transitions if t.new is Phase.COMBINED]
+    splits = [i for i, f in enumerate(out) for t in f.transitions if t.old is Phase.COMBINED]
+    assert joined and max(joined) < drift
+    assert splits and min(splits) >= hands_part
+    _assert_right_hands_owned(out[-1], a, b)
+
+
 @pytest.mark.parametrize("revise_s", [0.5, 0.0])
 def test_a_hand_taken_for_the_wrong_person_is_relabelled(rig, rng, revise_s):
     """b's right hand shows before b's head does (b's head hidden), held out 85 cm from a's
