@@ -171,6 +171,8 @@ class CandidateSet:
     cam_pairs : (K, 2) int, optional -- indices (into the rig's camera order) of the two views;
         -1 for points no camera pair made (the arm model's hands, ``surveil.armpose.feed``)
     blob_pairs : (K, 2) int, optional -- blob indices in those two views (-1 likewise)
+    rescued : (K,) bool, optional -- kept only because a tracked target was expected there
+        (``surveil.recon.candidates.rescue_expected``); explaining away dropped it
     """
 
     points_m: np.ndarray
@@ -178,6 +180,7 @@ class CandidateSet:
     half_gap_m: np.ndarray | None = None
     cam_pairs: np.ndarray | None = None
     blob_pairs: np.ndarray | None = None
+    rescued: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         k = len(self.points_m)
@@ -188,6 +191,7 @@ class CandidateSet:
             ("half_gap_m", (k,), np.floating),
             ("cam_pairs", (k, 2), np.integer),
             ("blob_pairs", (k, 2), np.integer),
+            ("rescued", (k,), np.bool_),
         ):
             value = getattr(self, name)
             if value is not None:

@@ -78,8 +78,8 @@ def with_arm_hands(
     support_radius_px: float,
 ) -> CandidateSet:
     """``candidates`` followed by :func:`arm_hand_points` with prior ``cfg.feed_prior``;
-    their ``cam_pairs`` and ``blob_pairs`` rows are -1 and ``half_gap_m`` NaN (no camera
-    pair made them)."""
+    their ``cam_pairs`` and ``blob_pairs`` rows are -1, ``half_gap_m`` NaN (no camera
+    pair made them) and ``rescued`` false."""
     extra = arm_hand_points(candidates, poses, observations, rig, cfg, support_radius_px)
     if not len(extra):
         return candidates
@@ -96,4 +96,5 @@ def with_arm_hands(
         half_gap_m=rows(candidates.half_gap_m, np.nan),
         cam_pairs=rows(candidates.cam_pairs, -1),
         blob_pairs=rows(candidates.blob_pairs, -1),
+        rescued=rows(candidates.rescued, False),
     )

@@ -456,6 +456,7 @@ def make_candidates(
     points, half_gap = points[kept], half_gap[kept]
     cam_pairs = np.column_stack([cam_all[ia], cam_all[ib]])
     blob_pairs = np.column_stack([blob_all[ia], blob_all[ib]])
+    rescued = None
     if cfg.explain_away:
         merged = np.flatnonzero(ok)[kept]
         support = view_support(
@@ -468,10 +469,12 @@ def make_candidates(
             {m: (px[merged], depth[merged]) for m, (px, depth) in projected.items()},
         )
         real = explain_away(support, prior)
+        explained = real
         if expected_m is not None:
             real = rescue_expected(
                 points, prior, real, expected_m, cfg.expected_radius_m, cfg.rescue_pair_m
             )
+        rescued = (real & ~explained)[real]
         points, prior, half_gap = points[real], prior[real], half_gap[real]
         cam_pairs, blob_pairs = cam_pairs[real], blob_pairs[real]
     log.debug(
@@ -487,4 +490,5 @@ def make_candidates(
         half_gap_m=half_gap,
         cam_pairs=cam_pairs,
         blob_pairs=blob_pairs,
+        rescued=rescued,
     )

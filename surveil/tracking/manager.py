@@ -139,6 +139,7 @@ class _Track:
     typed_frames: int = 0
     speed_ema_mps: float = 0.0
     support_ema: float = 0.0  # smoothed likelihood level (a ghost's is lower: fewer views)
+    rescued_frames: int = 0  # consecutive frame sets its nearest candidate was a rescued one
     contest_ns: int | None = None  # since when it out-supports a hand holding a slot
     third_hand_ns: int | None = None  # since when it is a third hand beside an own-hands pair
     home_hand_ns: int | None = None  # since when it is an owner's hand gone home from a pair
@@ -146,7 +147,9 @@ class _Track:
     partner: int | None = None
     joined_ns: int | None = None  # when it entered its current combined state
     joined_m: np.ndarray | None = None  # its estimate then
-    joined_others_m: np.ndarray | None = None  # (K, 3) other labelled targets' estimates then
+    joined_others: dict[int, np.ndarray] | None = None  # other labelled targets' estimates then
+    # where such targets' trackers had drifted to, since, before they were put back
+    ghosts_m: list[np.ndarray] = field(default_factory=list)
     joined_apart: bool = False  # it combined while combine_distance_m or more from its partner
     unjoin_frames: int = 0  # consecutive frame sets whose modes say the pair never met
     body_fails: int = 0  # frame sets in which it failed the body check (a head candidate)
@@ -299,6 +302,7 @@ class MultiTargetTracker:
         prior = np.asarray(candidates.prior, dtype=np.float64)
 
         self._filter(pts, prior, dt_s)
+        self._count_rescued(pts, candidates.rescued)
         pairs, drifted = self._combine_pairs()
         self._measure_separation(pts, prior, dt_s, t_ns)
         seeds = self._update_seeds(pts, prior, dt_s, t_ns)
@@ -307,6 +311,7 @@ class MultiTargetTracker:
         merged = self._merge_lost(t_ns, reacquired, pairs, strong)
         used = set(reacquired.values())  # seeds taken: no tracker starts on them
         weak = {i for i, sd in enumerate(seeds) if sd.count == 0}  # they only re-acquire
+        used |= self._return_drifted(seeds, used | weak)
         used |= self._split_on_seeds(seeds, used | weak)
         used |= self._split_out_of_reach(seeds, used | weak)
         self._split_on_third_hand(t_ns)
@@ -316,6 +321,21 @@ class MultiTargetTracker:
         transitions = self._advance_phases(t_ns, pairs, drifted, reacquired, merged)
         transitions += self._initialise(seeds, used, t_ns)
         return self._frame(t_ns, transitions)
+
+    def _count_rescued(self, pts: np.ndarray, rescued: np.ndarray | None) -> None:
+        """Update every active tracker's ``rescued_frames``: one more if the candidate
+        nearest its estimate, within ``explained_radius_m``, was kept only because a target
+        was expected there (``CandidateSet.rescued``), else back to 0."""
+        act = [tr for tr in self._tracks.values() if tr.phase in ACTIVE]
+        if rescued is None or not len(pts) or not act:
+            for tr in act:
+                tr.rescued_frames = 0
+            return
+        d = np.linalg.norm(np.array([tr.mean_m for tr in act])[:, None] - pts[None], axis=2)
+        nearest = d.argmin(axis=1)
+        near = d[np.arange(len(act)), nearest] <= self.cfg.lifecycle.explained_radius_m
+        for tr, k, ok in zip(act, nearest, near, strict=True):
+            tr.rescued_frames = tr.rescued_frames + 1 if ok and rescued[k] else 0
 
     def _step_s(self, t_ns: int) -> float:
         """Time step from the previous frame set to ``t_ns``, at most ``max_dt_s`` (0 first)."""
@@ -743,10 +763,10 @@ class MultiTargetTracker:
         clothes beside shaking hands). A seed whose present run began that early is not
         judged: its own steady evidence says the joining was not of two targets (a tracker
         that slid onto the other's hand while its own went home). Also true if another
-        labelled target's estimate (normal) was within ``init_gate_m`` of ``seed_m`` when
-        the pair joined (``joined_others_m``): that target stood there, and its tracker has
-        drifted off it since. (Not an unlabelled tracker's: one left over where a hand
-        rested before it reached out marks that hand's home, where it comes back.)"""
+        labelled target (normal) stood there when the pair joined (:meth:`_stood_there`):
+        that target's tracker has drifted off it since (:meth:`_return_drifted`). (Not an
+        unlabelled tracker: one left over where a hand rested before it reached out marks
+        that hand's home, where it comes back.)"""
         lc = self.cfg.lifecycle
         if pair.joined_ns is None or pair.joined_m is None:
             return False
@@ -759,14 +779,51 @@ class MultiTargetTracker:
                 break
             if t_ns > start_ns and (np.linalg.norm(pts - seed_m, axis=1) <= lc.init_gate_m).any():
                 return True
-        others = pair.joined_others_m
-        if (
-            others is not None
-            and (np.linalg.norm(others - seed_m, axis=1) <= lc.init_gate_m).any()
-        ):
-            log.debug("t%d: a tracker stood at %s as the pair joined", pair.id, seed_m.round(2))
+        if any(np.linalg.norm(g - seed_m) <= lc.init_gate_m for g in pair.ghosts_m):
             return True
-        return False
+        return self._stood_there(pair, seed_m) is not None
+
+    def _stood_there(self, pair: _Track, seed_m: np.ndarray) -> int | None:
+        """The id of the labelled target whose estimate was nearest ``seed_m``, within
+        ``init_gate_m``, when the combined pair ``pair`` joined (``joined_others``); None if
+        there was none."""
+        if not pair.joined_others:
+            return None
+        ids = list(pair.joined_others)
+        d = np.linalg.norm(np.array(list(pair.joined_others.values())) - seed_m, axis=1)
+        k = int(np.argmin(d))
+        return ids[k] if d[k] <= self.cfg.lifecycle.init_gate_m else None
+
+    def _return_drifted(self, seeds: list[_Pending], used: set[int]) -> set[int]:
+        """Put labelled targets' trackers that drifted off them back on their seeds; returns
+        the seeds used.
+
+        A confirmed seed where a labelled target (normal) stood as a combined pair joined
+        (:meth:`_stood_there`) is that target, not one leaving the pair
+        (:meth:`_there_as_pair_joined`). The target's tracker, no longer explaining it, has
+        moved off it, onto a ghost beside it (bundled handshake, seed 3: p2's resting left
+        hand lost its candidate for a frame set and its tracker slid 33 cm up onto a blob
+        pair on p2's shirt). Started there, a new tracker would take the target from it
+        (an identity switch); instead the target's own tracker is drawn again around the
+        seed. The place it leaves is a ghost that stood beside the pair while both its
+        targets were in it: the pair remembers it (``ghosts_m``), and a seed there does not
+        part it either."""
+        lc = self.cfg.lifecycle
+        out: set[int] = set()
+        for pair, other in self._combined_pairs():
+            for i, sd in enumerate(seeds):
+                if i in used or i in out or sd.count < lc.init_confirm_frames:
+                    continue
+                tid = self._stood_there(pair, sd.position_m)
+                back = self._tracks.get(tid) if tid is not None else None
+                if back is None or back.phase is not Phase.NORMAL or not back.labelled:
+                    continue
+                for t in (pair, other):
+                    t.ghosts_m.append(back.mean_m.copy())
+                self._reinit(back, sd.position_m, sd.velocity_mps)
+                out.add(i)
+                log.debug("t%d back on its target at %s", back.id, sd.position_m.round(2))
+        return out
 
     def _split_on_seeds(self, seeds: list[_Pending], used: set[int]) -> set[int]:
         """Part combined pairs on confirmed seeds near them; returns the seeds used.
@@ -1945,13 +2002,11 @@ class MultiTargetTracker:
                 partner_id = pairs[tid]
                 tr.partner = partner_id
                 tr.joined_ns, tr.joined_m = t_ns, tr.mean_m.copy()
-                tr.joined_others_m = np.array(
-                    [
-                        o.mean_m
-                        for o in self._tracks.values()
-                        if o.phase is Phase.NORMAL and o.labelled and o.id not in (tid, partner_id)
-                    ]
-                ).reshape(-1, 3)
+                tr.joined_others = {
+                    o.id: o.mean_m.copy()
+                    for o in self._tracks.values()
+                    if o.phase is Phase.NORMAL and o.labelled and o.id not in (tid, partner_id)
+                }
                 tr.out_of_reach_frames = 0
                 gap = float(np.linalg.norm(tr.mean_m - self._tracks[partner_id].mean_m))
                 tr.joined_apart = gap >= lc.combine_distance_m
@@ -1965,7 +2020,8 @@ class MultiTargetTracker:
                     self._separate(tr, self._tracks[partner_id], met)
                     separated_done.update((tid, partner_id))
                 tr.partner = None
-                tr.joined_ns = tr.joined_m = tr.joined_others_m = None
+                tr.joined_ns = tr.joined_m = tr.joined_others = None
+                tr.ghosts_m = []
                 tr.joined_apart, tr.unjoin_frames = False, 0
                 tr.out_of_reach_frames = 0
                 tr.before_vec_m = None
@@ -2198,12 +2254,17 @@ class MultiTargetTracker:
     def expected_hands(self, t_ns: int) -> np.ndarray:
         """(E, 3) where the active trackers not typed as heads are predicted to be at time
         ``t_ns`` (constant velocity from their estimates), m: the candidate stage's feedback
-        (heads are big blobs that rarely lose their candidate)."""
+        (heads are big blobs that rarely lose their candidate). Not a combined pair whose
+        nearest candidate was a rescued one for ``rescue_max_frames`` frame sets in a row
+        (hands approaching each other, whose blobs merge, are what rescuing is for)."""
         dt_s = max(self._step_s(int(t_ns)), 0.0)
+        limit = self.cfg.lifecycle.rescue_max_frames
         out = [
             tr.mean_m + tr.vel_mps * dt_s
             for tr in self._tracks.values()
-            if tr.phase in ACTIVE and tr.is_hand is not False
+            if tr.phase in ACTIVE
+            and tr.is_hand is not False
+            and not (limit and tr.phase is Phase.COMBINED and tr.rescued_frames >= limit)
         ]
         return np.array(out).reshape(-1, 3)
 

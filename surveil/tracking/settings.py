@@ -95,6 +95,16 @@ class LifecycleConfig:
         0.15, "a candidate this close to a live tracker's estimate is explained by it, m", min=0.0
     )
     max_trackers: int = setting(24, "no new tracker starts while this many are live", min=1)
+    rescue_max_frames: int = setting(
+        2,
+        "a combined pair whose nearest candidate was kept only because it was expected there "
+        "(recon.rescue_expected) for this many consecutive frame sets is no longer expected "
+        "by the candidate stage until a candidate of its own supports it again: a pair left "
+        "on a ghost where two hands' lines of sight cross would otherwise rescue that ghost "
+        "in every frame set. Approaching hands, whose blobs merge, are always expected "
+        "(0 = no limit)",
+        min=0,
+    )
     combine_distance_m: float = setting(
         0.10, "two trackers whose estimates come closer than this combine, m", min=0.0
     )

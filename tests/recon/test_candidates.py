@@ -198,7 +198,8 @@ def test_expected_position_spares_the_dropped_candidate_next_to_it():
     """Explaining away drops G; a tracker that expects a target 5 cm from G, with another
     target expected 25 cm away (hands about to meet), gets it back. One that expects a target
     there alone (a tracker left on a ghost), at limb A (which has its candidate) or far from
-    everything adds nothing."""
+    everything adds nothing. The candidate set marks the candidate it got back as rescued
+    (the tracker limits how long a target may live on rescued candidates)."""
     rig = _rig()
     a, b, g = _exact_ghost(rig)
     obs = [
@@ -215,8 +216,11 @@ def test_expected_position_spares_the_dropped_candidate_next_to_it():
         ([[0.5, 0.5, 1]], False),
     ):
         cs = make_candidates(obs, rig, CFG, expected_m=np.array(expected))
-        assert (np.linalg.norm(cs.points_m - g, axis=1) < 0.01).any() == ghost_back
+        at_g = np.linalg.norm(cs.points_m - g, axis=1) < 0.01
+        assert at_g.any() == ghost_back
         assert len(cs.points_m) == len(plain.points_m) + ghost_back
+        assert cs.rescued.tolist() == at_g.tolist()
+    assert not plain.rescued.any()
 
 
 def test_rescue_gives_each_expected_position_its_own_strongest_dropped_candidate():

@@ -382,6 +382,43 @@ def test_expected_hands_extrapolates_moving_targets_for_the_candidate_stage(rig,
     assert MultiTargetTracker(LONE, rig, seed=1).expected_hands(0).shape == (0, 3)
 
 
+@pytest.mark.parametrize("limit", [2, 0])
+def test_a_pair_held_only_by_rescued_candidates_is_no_longer_expected(rig, rng, limit):
+    """The candidate stage rescues a dropped candidate where hands are expected; a combined
+    pair whose nearest candidate was such a rescued one for rescue_max_frames frame sets in a
+    row (a pair left on the ghost where two hands' lines of sight cross) is not expected any
+    more, so the ghost is not rescued again, until a candidate of its own supports it. A
+    lone hand is always expected (approaching hands, whose blobs merge, are what rescuing is
+    for); with no limit (0) so is the pair."""
+    frames, _, p = clap_frames(cross=False)
+    rest = 35 + 8 + 5  # the hands have joined and rest together
+    cfg = TrackingConfig(
+        lifecycle=LifecycleConfig(retire_unclaimed_s=0.0, rescue_max_frames=limit)
+    )
+    trk = MultiTargetTracker(cfg, rig, seed=1)
+    out = run(trk, frames[:rest], rng)
+    assert sum(s.phase is Phase.COMBINED for s in out[-1].targets) == 2
+    meet = frames[rest - 1][1]
+
+    def step(i: int, rescued: bool) -> int:
+        cands = CandidateSet(
+            np.array([p["head"], meet]), np.array([0.9, 0.9]), rescued=np.array([False, rescued])
+        )
+        trk.step(i * DT_NS, cands)
+        return len(trk.expected_hands((i + 1) * DT_NS))
+
+    seen = [step(rest + k, rescued) for k, rescued in enumerate([True, True, True, False])]
+    assert seen == ([2, 0, 0, 2] if limit else [2, 2, 2, 2])
+
+    lone = MultiTargetTracker(cfg, rig, seed=1)
+    point = np.array([2.0, 2.0, 1.0])
+    run(lone, [[point]] * 10, rng)
+    for k in range(3):
+        rescued = CandidateSet(point[None].copy(), np.array([0.9]), rescued=np.array([True]))
+        lone.step((10 + k) * DT_NS, rescued)
+    assert len(lone.expected_hands(13 * DT_NS)) == 1
+
+
 def test_predicted_targets_are_the_last_frame_moved_on_to_the_next_time(rig, rng):
     trk = MultiTargetTracker(LONE, rig, seed=1)
     truth = [np.array([1.0 + i / 15, 2.0, 1.0]) for i in range(31)]  # 1 m/s along x
@@ -975,9 +1012,10 @@ def test_a_hand_whose_tracker_drifted_off_it_does_not_part_a_pair(rig, rng):
     its candidate to one 35 cm above it (a blob pair on b's shirt) and its tracker follows it
     up; then the hand's own candidate shows again. That seed is where b's left-hand tracker
     stood as the pair joined, so it is not a hand leaving the pair: the pair stays combined
-    until the hands part and each right hand keeps its owner's label (bundled handshake
-    scene, seed 3, 4.33 s; without the rule the pair parts onto the seed there and then, and
-    the hands' labels go wrong)."""
+    until the hands part, each right hand keeps its owner's label, and the left hand's own
+    tracker is put back on it, so no new tracker takes it; nor does the ghost it leaves part
+    the pair (bundled handshake scene, seed 3, 4.33 s; without the rule the pair parts onto
+    the seed there and then, and the hands' labels go wrong)."""
     frames, a, b, meet = shaking_hands(hold=30)
     rest = _head_and_left
     b["left_hand"] = b["left_hand"] + [-0.08, 0.05, 0.0]  # 53 cm from where the hands meet
@@ -1016,6 +1054,11 @@ def test_a_hand_whose_tracker_drifted_off_it_does_not_part_a_pair(rig, rng):
     assert joined and max(joined) < drift
     assert splits and min(splits) >= hands_part
     _assert_right_hands_owned(out[-1], a, b)
+    # and b's left-hand tracker is put back on its hand: no new tracker takes it
+    left_before = _owner_of(out[drift - 1], b["left_hand"])
+    left_ids = {s.label: s.target_id for s in out[drift - 1].targets}
+    near = min(out[-1].targets, key=lambda s: np.linalg.norm(s.mean_m - b["left_hand"]))
+    assert near.target_id == left_ids[left_before] and near.label == left_before
 
 
 @pytest.mark.parametrize("revise_s", [0.5, 0.0])
