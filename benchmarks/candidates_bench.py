@@ -35,7 +35,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 from front_end import observe_recording
-from pipeline_bench import add_scene_arguments, bench, output_path, render, scene_names
+from pipeline_bench import add_scene_arguments, render, run_of, scene_names
 
 from surveil.eval.score import align_frames
 from surveil.io.ground_truth import MaskClass, load_ground_truth
@@ -86,15 +86,11 @@ def score_run(rec_dir: Path, mcap: Path, learning_frames: int) -> dict[str, floa
     gt = load_ground_truth(rec_dir)
     run = read_run(mcap)
     rows = align_frames(gt.t_ns, run.candidate_t_ns, gt.fps)
-    by_frame = np.bincount(run.candidate_frame, minlength=len(run.candidate_t_ns))
-    starts = np.concatenate([[0], np.cumsum(by_frame)])
-    order = np.argsort(run.candidate_frame, kind="stable")
     score = CandidateScore()
     for m, g in enumerate(rows):
         if g < 0 or gt.frames[g] < learning_frames:
             continue
-        points = run.candidate_pos_m[order[starts[m] : starts[m + 1]]]
-        score.add(points, gt.positions_m[g], gt.n_views[g])
+        score.add(run.candidate_pos_m[run.candidate_rows(m)], gt.positions_m[g], gt.n_views[g])
     return score.summary()
 
 
@@ -178,10 +174,7 @@ def main(argv: list[str] | None = None) -> int:
         print("| scenario | recall 50 mm | recall 100 mm | false / set | true limbs / set |")
         print("|---|---|---|---|---|")
         for name in scene_names(args):
-            mcap = output_path(args.out, name, args.config, args.seed)
-            if args.rerun or not mcap.exists():
-                bench(name, args.out, args.seed, args.config)
-            r = score_run(args.out / name, mcap, cfg.background.learning_frames)
+            r = score_run(args.out / name, run_of(name, args), cfg.background.learning_frames)
             print(
                 f"| {name} | {r['recall50']:.3f} | {r['recall100']:.3f} "
                 f"| {r['false_per_set']:.2f} | {r['limbs_per_set']:.2f} |",

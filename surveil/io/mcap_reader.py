@@ -111,6 +111,12 @@ class RunData:
         lo, hi = np.searchsorted(self.target_frame, [i, i + 1])
         return slice(int(lo), int(hi))
 
+    def candidate_rows(self, i: int) -> slice:
+        """The candidate rows of ``/candidates`` message ``i`` (rows are grouped by
+        message)."""
+        lo, hi = np.searchsorted(self.candidate_frame, [i, i + 1])
+        return slice(int(lo), int(hi))
+
 
 def decode_point_cloud(msg: Any) -> dict[str, np.ndarray]:
     """Decode a ``foxglove.PointCloud``'s packed ``data`` into one array per field.

@@ -292,6 +292,7 @@ def test_read_run_round_trip(rig: Rig, tmp_path: Path) -> None:
         run.target_pos_m[run.frame_rows(2)], [tg.mean_m for tg in targets()[:3]]
     )
     assert run.candidate_frame.tolist() == [0, 0, 1, 1, 2, 2]
+    assert run.candidate_rows(1) == slice(2, 4)
     assert run.metadata["rules"] == {"a": "b"}
     assert run.events == (exchange(),)
 
