@@ -25,23 +25,19 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import dataclasses
 import sys
 from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
-from pipeline_bench import add_run_arguments, render, run_of, scene_names
+from pipeline_bench import add_run_arguments, render, run_of, run_to, scene_names
 from tracking_bench import make_candidates as truth_candidates
 from tracking_bench import merged_views
 
 import surveil.pipeline as pipeline_module
-from surveil.activity import load_rules
 from surveil.eval.score import EvalConfig, EvalReport, evaluate
 from surveil.io.ground_truth import load_ground_truth
-from surveil.io.mcap_writer import McapSink, McapWriter
-from surveil.io.recording import open_recording
-from surveil.pipeline import Pipeline, load_pipeline_config, run_recording, use_one_opencv_thread
+from surveil.pipeline import Pipeline
 
 
 @contextlib.contextmanager
@@ -94,13 +90,13 @@ def run_oracle(name: str, args: argparse.Namespace) -> Path:
     if mcap.exists() and not args.rerun:
         return mcap
     rec_dir = render(name, args.out)
-    use_one_opencv_thread()
-    rec = open_recording(rec_dir)
-    cfg = dataclasses.replace(load_pipeline_config(args.config), seed=args.seed)
-    pipeline = Pipeline.for_recording(rec, cfg, load_rules())
-    sink = McapSink(McapWriter(mcap, rec.rig, start_time_ns=rec.start_time_ns))
-    with candidates_from_truth(rec_dir, pipeline, args.seed):
-        run_recording(rec.framesets, rec.n_framesets, pipeline, [sink])
+    run_to(
+        rec_dir,
+        mcap,
+        args.seed,
+        args.config,
+        around=lambda pipeline: candidates_from_truth(rec_dir, pipeline, args.seed),
+    )
     return mcap
 
 

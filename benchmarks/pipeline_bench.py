@@ -14,13 +14,21 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import sys
+from collections.abc import Callable
+from contextlib import AbstractContextManager, nullcontext
 from pathlib import Path
 
 from surveil.activity import load_rules
 from surveil.eval.score import EvalConfig, evaluate
 from surveil.io.mcap_writer import McapSink, McapWriter
 from surveil.io.recording import open_recording
-from surveil.pipeline import Pipeline, load_pipeline_config, run_recording, use_one_opencv_thread
+from surveil.pipeline import (
+    Pipeline,
+    RunSummary,
+    load_pipeline_config,
+    run_recording,
+    use_one_opencv_thread,
+)
 from surveil.synth.scene import synthesise
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -88,17 +96,31 @@ def render(name: str, out_dir: Path) -> Path:
     return rec_dir
 
 
+def run_to(
+    rec_dir: Path,
+    mcap: Path,
+    seed: int,
+    config: Path | None = None,
+    around: Callable[[Pipeline], AbstractContextManager] = lambda _pipeline: nullcontext(),
+) -> RunSummary:
+    """Run the pipeline on ``rec_dir`` as `surveil run` does, writing ``mcap``; the run
+    happens inside ``around(pipeline)`` (a benchmark's change to the pipeline, e.g.
+    ``oracle_candidates.py``'s)."""
+    use_one_opencv_thread()  # as `surveil run`
+    rec = open_recording(rec_dir)
+    cfg = dataclasses.replace(load_pipeline_config(config), seed=seed)
+    pipeline = Pipeline.for_recording(rec, cfg, load_rules())
+    sink = McapSink(McapWriter(mcap, rec.rig, start_time_ns=rec.start_time_ns))
+    with around(pipeline):
+        return run_recording(rec.framesets, rec.n_framesets, pipeline, [sink])
+
+
 def bench(
     name: str, out_dir: Path, seed: int, config: Path | None = None
 ) -> tuple[object, object, float]:
     rec_dir = render(name, out_dir)
-    use_one_opencv_thread()  # as `surveil run`
-    rec = open_recording(rec_dir)
     mcap = output_path(out_dir, name, config, seed)
-    cfg = dataclasses.replace(load_pipeline_config(config), seed=seed)
-    pipeline = Pipeline.for_recording(rec, cfg, load_rules())
-    sink = McapSink(McapWriter(mcap, rec.rig, start_time_ns=rec.start_time_ns))
-    summary = run_recording(rec.framesets, rec.n_framesets, pipeline, [sink])
+    summary = run_to(rec_dir, mcap, seed, config)
     report = evaluate(rec_dir, mcap, EvalConfig())
     return report, summary, summary.n_framesets / summary.wall_s
 
