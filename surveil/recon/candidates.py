@@ -434,18 +434,26 @@ def make_candidates(
     else:
         d_v = [rel_v_all[ia], rel_v_all[ib]]
     p_o = gauss_term(d_v[0] - d_v[1], cfg.sigma_rel_v)
-    keep = (p_o >= cfg.term_threshold) & (p_o * p_t >= cfg.prior_threshold)
+    threshold = np.full(len(points), cfg.prior_threshold)
+    if (
+        expected_m is not None
+        and len(expected_m)
+        and cfg.expected_prior_threshold < cfg.prior_threshold
+    ):
+        near = np.linalg.norm(points[:, None] - expected_m[None], axis=2).min(axis=1)
+        threshold[near <= cfg.expected_gate_m] = cfg.expected_prior_threshold
+    keep = (p_o >= cfg.term_threshold) & (p_o * p_t >= threshold)
     if not keep.any():
         return _empty()
     ia, ib, points, half_gap = ia[keep], ib[keep], points[keep], half_gap[keep]
-    p_o, p_t = p_o[keep], p_t[keep]
+    p_o, p_t, threshold = p_o[keep], p_t[keep], threshold[keep]
     # eq. 27 (silhouette consistency) on the survivors only
     projected = project_into(points, rig, by_cam)
     p_b = silhouette_prior(
         points, rig, by_cam, cfg.sigma_silhouette_px, cfg.silhouette_drop_worst, projected
     )
     prior = p_o * p_t * p_b  # eq. 19
-    ok = (p_b >= cfg.term_threshold) & (prior >= cfg.prior_threshold)
+    ok = (p_b >= cfg.term_threshold) & (prior >= threshold)
     ia, ib, points, half_gap, prior = ia[ok], ib[ok], points[ok], half_gap[ok], prior[ok]
     if len(points) == 0:
         return _empty()

@@ -82,6 +82,16 @@ class CandidateConfig:
         "lone tracker on a ghost would rescue it forever), m",
         min=0.0,
     )
+    expected_prior_threshold: float = setting(
+        0.1,
+        "the product threshold for a candidate within expected_gate_m of a tracked hand's "
+        "predicted position (a hand whose terms each pass but whose product is low: a "
+        "merged silhouette's top in one view); prior_threshold or more = off. Not in the "
+        "paper (docs/candidates.md)",
+        min=0.0,
+        max=1.0,
+    )
+    expected_gate_m: float = setting(0.1, "... within this of the predicted position, m", min=0.0)
     support_radius_px: float = setting(
         8.0,
         "a blob whose centroid is within this of a candidate's projection supports it, px",

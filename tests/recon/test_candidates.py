@@ -258,6 +258,28 @@ def test_mismatched_relative_v_makes_p_o_small():
     np.testing.assert_allclose(cs.prior, [np.exp(-0.5 * (0.15 / CFG.sigma_rel_v) ** 2)])
 
 
+def test_a_weak_candidate_is_kept_only_next_to_a_tracked_hand():
+    """p_o = 0.20 (D_v 0.2 against 0.38, as where one view's silhouette top is another
+    person's head): under the product threshold 0.2, dropped; kept at the lower
+    ``expected_prior_threshold`` where a tracked hand is predicted within
+    ``expected_gate_m``, and only there."""
+    rig = _rig(2)
+    obs = [
+        _observation(rig.cameras[0], HEAD, rel_v=np.array([0.2])),
+        _observation(rig.cameras[1], HEAD, rel_v=np.array([0.38])),
+    ]
+    weak_near_hands = SIL_BOTTOM  # expected_prior_threshold 0.1 by default
+    off = dataclasses.replace(SIL_BOTTOM, expected_prior_threshold=SIL_BOTTOM.prior_threshold)
+    assert len(make_candidates(obs, rig, off, expected_m=HEAD).points_m) == 0
+    assert len(make_candidates(obs, rig, weak_near_hands).points_m) == 0
+    far = HEAD + np.array([[0.0, 0.0, 0.15]])
+    assert len(make_candidates(obs, rig, weak_near_hands, expected_m=far).points_m) == 0
+    near = HEAD + np.array([[0.0, 0.05, 0.0]])
+    cs = make_candidates(obs, rig, weak_near_hands, expected_m=near)
+    np.testing.assert_allclose(cs.points_m, HEAD, atol=1e-6)
+    np.testing.assert_allclose(cs.prior, [np.exp(-0.5 * (0.18 / CFG.sigma_rel_v) ** 2)])
+
+
 def _standing(cam: Camera, at_m, blobs_m: np.ndarray, hidden_below_m: float = 0.0):
     """A person 1.8 m tall standing at ``at_m`` (x, y), seen by ``cam`` down to
     ``hidden_below_m`` (a table in front hides the rest), with skin blobs at ``blobs_m``;
