@@ -322,7 +322,9 @@ def make_candidates(
     expected_m : (E, 3) float or None
         Where tracked targets are predicted to be in this frame set, m (the tracker's
         feedback): explaining away spares the strongest candidate near each of them that
-        would otherwise have none (:func:`rescue_expected`, ``cfg.expected_radius_m``).
+        would otherwise have none (:func:`rescue_expected`, ``cfg.expected_radius_m``), and
+        a candidate within ``cfg.expected_gate_m`` of one needs only
+        ``cfg.expected_prior_threshold`` on its product.
 
     Returns
     -------
@@ -340,7 +342,8 @@ def make_candidates(
     -----
     A candidate survives if it lies in front of both cameras, at ``z >= cfg.min_z_m``, has
     ``d <= cfg.max_gap_m``, each of p_o (eq. 25), p_t (eq. 26), p_b (eq. 27) reaches
-    ``cfg.term_threshold`` and their product (eq. 19) reaches ``cfg.prior_threshold``.
+    ``cfg.term_threshold`` and their product (eq. 19) reaches ``cfg.prior_threshold``
+    (``cfg.expected_prior_threshold`` next to an expected position).
     p_o assumes that higher points have smaller v in every camera (cameras high up, looking
     down). Survivors closer than ``cfg.merge_radius_m`` are merged, strongest first.
 
