@@ -30,7 +30,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
-from pipeline_bench import add_run_arguments, render, run_of, run_to, scene_names
+from pipeline_bench import add_run_arguments, cell, render, run_of, run_to, scene_names
 from tracking_bench import make_candidates as truth_candidates
 from tracking_bench import merged_views
 
@@ -102,14 +102,10 @@ def run_oracle(name: str, args: argparse.Namespace) -> Path:
 
 def row(name: str, kind: str, report: EvalReport) -> str:
     t, e = report.targets, report.events
-
-    def f(x, digits=3):
-        return "-" if x is None else f"{x:.{digits}f}"
-
     return (
-        f"| {name} | {kind} | {f(t.recall)} | {f(t.head_error_mm_mean, 0)} "
-        f"| {f(t.hand_error_mm_mean, 0)} | {f(t.false_targets_per_frame, 2)} "
-        f"| {f(t.left_right_accuracy)} | {t.id_switches} | {f(t.id_switches_per_min, 1)} "
+        f"| {name} | {kind} | {cell(t.recall)} | {cell(t.head_error_mm_mean, 0)} "
+        f"| {cell(t.hand_error_mm_mean, 0)} | {cell(t.false_targets_per_frame, 2)} "
+        f"| {cell(t.left_right_accuracy)} | {t.id_switches} | {cell(t.id_switches_per_min, 1)} "
         f"| {e.n_matched} / {e.n_true} | {e.n_pred - e.n_matched} |"
     )
 

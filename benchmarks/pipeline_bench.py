@@ -34,7 +34,8 @@ from surveil.synth.scene import synthesise
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _f(x, digits=3):
+def cell(x, digits=3):
+    """A metric for a Markdown table cell: ``-`` where it is undefined (None)."""
     return "-" if x is None else f"{x:.{digits}f}"
 
 
@@ -185,19 +186,19 @@ def main(argv: list[str] | None = None) -> int:
         t, e = report.targets, report.events
         stages = summary.median_ms()
         track_rows.append(
-            f"| {name} | {_f(t.recall)} | {_f(t.head_error_mm_mean, 0)} / "
-            f"{_f(t.head_error_mm_median, 0)} | {_f(t.hand_error_mm_mean, 0)} / "
-            f"{_f(t.hand_error_mm_median, 0)} | {_f(t.false_targets_per_frame, 2)} "
-            f"| {_f(t.limb_type_accuracy)} | {_f(t.left_right_accuracy)} "
-            f"| {_f(t.person_consistency)} | {_f(t.id_switches_per_min, 1)} | {rate:.1f} "
+            f"| {name} | {cell(t.recall)} | {cell(t.head_error_mm_mean, 0)} / "
+            f"{cell(t.head_error_mm_median, 0)} | {cell(t.hand_error_mm_mean, 0)} / "
+            f"{cell(t.hand_error_mm_median, 0)} | {cell(t.false_targets_per_frame, 2)} "
+            f"| {cell(t.limb_type_accuracy)} | {cell(t.left_right_accuracy)} "
+            f"| {cell(t.person_consistency)} | {cell(t.id_switches_per_min, 1)} | {rate:.1f} "
             f"| {stages.get('carry', 0):.1f} |"
         )
         for a in e.activities:
             if a.n_true or a.n_pred:
                 event_rows.append(
                     f"| {name} | {a.activity} | {a.n_true} | {a.n_pred} | {a.n_matched} "
-                    f"| {_f(a.precision)} | {_f(a.recall)} | {_f(a.f1)} "
-                    f"| {_f(a.climax_error_ms_median, 0)} | {_f(a.direction_accuracy)} |"
+                    f"| {cell(a.precision)} | {cell(a.recall)} | {cell(a.f1)} "
+                    f"| {cell(a.climax_error_ms_median, 0)} | {cell(a.direction_accuracy)} |"
                 )
             if a.direction_accuracy is not None:  # matched events with a true giver
                 n_dir += a.n_matched
@@ -205,7 +206,7 @@ def main(argv: list[str] | None = None) -> int:
         n_true, n_pred, n_matched = n_true + e.n_true, n_pred + e.n_pred, n_matched + e.n_matched
         event_rows.append(
             f"| {name} | all (micro) | {e.n_true} | {e.n_pred} | {e.n_matched} "
-            f"| {_f(e.precision)} | {_f(e.recall)} | {_f(e.f1)} | | |"
+            f"| {cell(e.precision)} | {cell(e.recall)} | {cell(e.f1)} | | |"
         )
         print(track_rows[-1], file=sys.stderr, flush=True)
     print(
@@ -226,9 +227,9 @@ def main(argv: list[str] | None = None) -> int:
     print(
         f"Over the scenarios above: {n_matched} of {n_true} true events recognised, "
         f"{n_pred} predicted; "
-        f"P {_f(n_matched / n_pred if n_pred else None)}, "
-        f"R {_f(n_matched / n_true if n_true else None)}, "
-        f"F1 {_f(2 * n_matched / (n_true + n_pred) if n_true + n_pred else None)}; "
+        f"P {cell(n_matched / n_pred if n_pred else None)}, "
+        f"R {cell(n_matched / n_true if n_true else None)}, "
+        f"F1 {cell(2 * n_matched / (n_true + n_pred) if n_true + n_pred else None)}; "
         f"exchange direction right in {n_dir_ok} of {n_dir} recognised exchanges."
     )
     return 0
