@@ -45,6 +45,7 @@ from surveil.datatypes import (
 )
 from surveil.tracking import labelling as lab
 from surveil.tracking import sir
+from surveil.tracking.head_centre import head_rises_m
 from surveil.tracking.lifecycle import Evidence, next_phase
 from surveil.tracking.settings import TrackingConfig
 
@@ -160,6 +161,8 @@ class _Track:
     split_gain_m: float = 0.0  # how much farther apart they are now
     split_vel_mps: np.ndarray | None = None  # (2, 3) their velocities
     out_of_reach_frames: int = 0  # consecutive frame sets a pair was beyond an owner's reach
+    # a head's centre above its skin point, smoothed (head_centre); None = not measured yet
+    head_rise_m: float | None = None
     history: deque = field(default_factory=lambda: deque(maxlen=HISTORY_FRAMES))
 
     @property
@@ -318,6 +321,7 @@ class MultiTargetTracker:
         self._split_on_home_hand(t_ns)
         rel_v = self._candidate_rel_v(candidates, observations)
         self._label(pts, rel_v, t_ns, observations or {}, set(reacquired) | set(merged))
+        self._measure_head_rise(observations or {}, dt_s)
         transitions = self._advance_phases(t_ns, pairs, drifted, reacquired, merged)
         transitions += self._initialise(seeds, used, t_ns)
         return self._frame(t_ns, transitions)
@@ -1791,6 +1795,39 @@ class MultiTargetTracker:
             self._remove(gone)
         return k if len(p.hand_ids) < 2 else -1
 
+    def _measure_head_rise(
+        self, observations: Mapping[str, CameraObservation], dt_s: float
+    ) -> None:
+        """Each seen head's rise above its skin point, measured from the silhouettes' crowns
+        (:func:`head_rises_m`) and smoothed with time constant ``head_rise_tau_s``; a head no
+        view tells about keeps its last rise (first: ``head_centre_rise_m``)."""
+        cfg = self.cfg
+        if cfg.head_top_to_centre_m <= 0 or not observations:
+            return
+        views = [
+            (self.rig[name], obs.silhouettes.labels)
+            for name, obs in observations.items()
+            if name in self.rig
+        ]
+        heads = [
+            tr
+            for tr in self._tracks.values()
+            if tr.limb is Limb.HEAD and tr.phase in (Phase.NORMAL, Phase.UNLABELLED)
+        ]
+        if not heads:
+            return
+        rises = head_rises_m(
+            np.array([tr.mean_m for tr in heads]),
+            views,
+            cfg.head_top_to_centre_m,
+            cfg.head_rise_max_m,
+        )
+        alpha = 1.0 if cfg.head_rise_tau_s <= 0 else 1.0 - np.exp(-dt_s / cfg.head_rise_tau_s)
+        for tr, rise in zip(heads, rises.tolist(), strict=True):
+            if np.isfinite(rise):
+                last = cfg.head_centre_rise_m if tr.head_rise_m is None else tr.head_rise_m
+                tr.head_rise_m = last + alpha * (rise - last)
+
     def _update_facing(self, observations: Mapping[str, CameraObservation]) -> None:
         lcfg = self.cfg.labelling
         persons, heads = self._live_heads()
@@ -2232,7 +2269,7 @@ class MultiTargetTracker:
         else:
             mean = tr.mean_m + tr.vel_mps * dt_s
         if tr.limb is Limb.HEAD:
-            mean[2] += self.cfg.head_centre_rise_m
+            mean[2] += self.cfg.head_centre_rise_m if tr.head_rise_m is None else tr.head_rise_m
         return TargetSnapshot(
             target_id=tid,
             person=tr.person,

@@ -565,9 +565,33 @@ class TrackingConfig:
     )
     head_centre_rise_m: float = setting(
         0.04,
-        "a head target's reported position is its skin point raised by this much: the skin "
-        "a head shows is the face (or the neck and ears from behind), below the head's centre "
-        "under the hair; docs/tracking.md, 'Head centre', m",
+        "a head target's reported position is its skin point raised by this much where the "
+        "silhouettes do not tell how much (head_top_to_centre_m): the skin a head shows is "
+        "the face (or the neck and ears from behind), below the head's centre under the "
+        "hair; docs/tracking.md, 'Head centre', m",
         min=-0.2,
         max=0.2,
+    )
+    head_top_to_centre_m: float = setting(
+        0.125,
+        "a head's centre lies this far below the top of its silhouettes (the crown with its "
+        "hair: an adult head is about 23 cm from chin to crown); the rise of each head above "
+        "its skin point is measured from the silhouettes with it (0 = off: always "
+        "head_centre_rise_m), m",
+        min=0.0,
+        max=0.3,
+    )
+    head_rise_max_m: float = setting(
+        0.2,
+        "a view whose silhouette top puts a head's centre below its skin point or more than "
+        "this above it says nothing about the head (a raised hand or a taller person on top, "
+        "hair camouflaged against the wall), m",
+        min=0.0,
+        max=0.5,
+    )
+    head_rise_tau_s: float = setting(
+        0.5,
+        "time constant of the smoothing of each head's measured rise (it changes as the "
+        "person turns: face, cheek, neck), s",
+        min=0.0,
     )

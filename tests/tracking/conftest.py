@@ -64,3 +64,59 @@ def render_bodies(rig: Rig, bodies) -> dict:
 def draw_bodies(rig):
     """:func:`render_bodies` on the session's rig."""
     return lambda *bodies: render_bodies(rig, bodies)
+
+
+def person_labels(
+    cam, centre_xy, crown_m: float, head_radius_m: float, label: int = 1, labels=None
+) -> np.ndarray:
+    """A person's silhouette in ``cam`` (drawn into ``labels`` if given): a vertical column of
+    radius 0.2 m from the floor to the shoulders under a ball of radius ``head_radius_m``
+    whose top is ``crown_m`` high."""
+    import cv2
+
+    h, w = cam.height, cam.width
+    out = np.zeros((h, w), np.int32) if labels is None else labels
+    mask = np.zeros((h, w), np.uint8)
+    ang = np.linspace(0, 2 * np.pi, 48, endpoint=False)
+    ring = 0.2 * np.column_stack([np.cos(ang), np.sin(ang)]) + np.asarray(centre_xy)
+    shoulders = crown_m - 2 * head_radius_m
+    column = np.array([[x, y, z] for z in (0.0, shoulders) for x, y in ring])
+    px, depth = cam.project(column)
+    cv2.fillConvexPoly(mask, cv2.convexHull(np.rint(px[depth > 0]).astype(np.int32)), 1)
+    c_px, c_depth = cam.project(np.array([[*centre_xy, crown_m - head_radius_m]]))
+    radius_px = head_radius_m * float(cam.K[1, 1]) / float(c_depth[0])
+    cv2.circle(mask, tuple(np.rint(c_px[0]).astype(int)), round(radius_px), 1, -1)
+    out[mask > 0] = label
+    return out
+
+
+@pytest.fixture(scope="session")
+def draw_person_labels():
+    """:func:`person_labels`."""
+    return person_labels
+
+
+@pytest.fixture(scope="session")
+def draw_person(rig):
+    """Observations (no skin, no blobs) of one person drawn by :func:`person_labels`."""
+    from surveil.datatypes import BlobSet, CameraObservation, Silhouettes
+
+    def draw(centre_xy, crown_m: float, head_radius_m: float) -> dict:
+        out = {}
+        for cam in rig.cameras:
+            labels = person_labels(cam, centre_xy, crown_m, head_radius_m)
+            free = cv2_distance_outside(labels)
+            sil = Silhouettes(labels, np.zeros(1), np.full(1, cam.height - 1.0), free)
+            out[cam.name] = CameraObservation(
+                cam.name, sil, np.zeros(labels.shape, bool), BlobSet.empty(labels.shape)
+            )
+        return out
+
+    return draw
+
+
+def cv2_distance_outside(labels: np.ndarray) -> np.ndarray:
+    """(H, W) float32 distance of every pixel to the nearest silhouette pixel, px."""
+    import cv2
+
+    return cv2.distanceTransform((labels == 0).astype(np.uint8), cv2.DIST_L2, 3)

@@ -227,6 +227,27 @@ def test_a_still_person_seen_face_on_is_sided_by_the_face(rig, rng):
     assert by_label(guessed[-1])["p1/left_hand"][1] < a["head"][1]
 
 
+@pytest.mark.parametrize("top_to_centre_m", [0.11, 0.0])
+def test_a_head_is_reported_below_the_crown_its_silhouettes_show(
+    rig, draw_person, rng, top_to_centre_m
+):
+    # the head's skin point is a neck seen from behind, 12 cm below the head's centre (not
+    # the 4 cm of a face that head_centre_rise_m assumes): the silhouettes' crown, 11 cm
+    # above the centre, tells; with the measure off the fixed rise stands
+    a = body((2.5, 2.0), 0.0)
+    centre_z = a["head"][2] + 0.12
+    obs = draw_person(a["head"][:2], centre_z + 0.11, 0.11)
+    cfg = TrackingConfig(lifecycle=LONE.lifecycle, head_top_to_centre_m=top_to_centre_m)
+    trk = MultiTargetTracker(cfg, rig, seed=4)
+    frames = [[a["head"], a["left_hand"], a["right_hand"]]] * 40
+    out = [trk.step(i * DT_NS, candidates(pts, rng), obs) for i, pts in enumerate(frames)]
+    head = by_label(out[-1])["p1/head"]
+    want = centre_z if top_to_centre_m > 0 else a["head"][2] + cfg.head_centre_rise_m
+    assert abs(head[2] - want) < 0.02
+    # the hands are where their skin is
+    assert np.linalg.norm(by_label(out[-1])["p1/left_hand"] - a["left_hand"]) < 0.03
+
+
 @pytest.mark.parametrize("facing_deg", [120.0, 40.0, -70.0])
 def test_a_reaching_person_is_faced_along_the_silhouettes_body_axis(
     rig, draw_bodies, rng, facing_deg
