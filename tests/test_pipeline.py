@@ -219,9 +219,7 @@ def test_arm_trackers_feed_the_hands_no_two_views_see(small_recording):
     # docs/armpose.md): the feed is tested on the sides it was tuned with, and on the fixed
     # head rise it was tuned with (the measured one moves the heads by millimetres and this
     # median to 0.34 m: docs/armpose.md, "Sensitive to the head's height")
-    no_face = TrackingConfig(
-        labelling=LabellingConfig(face_weight=0.0), head_top_to_centre_m=0.0
-    )
+    no_face = TrackingConfig(labelling=LabellingConfig(face_weight=0.0), head_top_to_centre_m=0.0)
     cfg = PipelineConfig(tracking=no_face, arms=ArmPoseConfig(enabled=True, feed_candidates=True))
     pipe = Pipeline(cfg, rec.rig, load_rules())
     n_fed, n_poses, errors = 0, 0, []

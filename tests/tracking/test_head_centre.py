@@ -28,6 +28,7 @@ def test_a_view_that_cannot_see_the_crown_says_nothing(rig: Rig, draw_person_lab
     cam = rig.cameras[0]
     skin = np.array([2.0, 2.0, 1.62])
     labels = draw_person_labels(cam, skin[:2], 1.78, HEAD_R)
+
     def crown(head_m, labels):
         return crown_heights_m(np.array([head_m]), cam, labels, span_m=0.4)[0]
 
@@ -44,12 +45,11 @@ def test_a_view_that_cannot_see_the_crown_says_nothing(rig: Rig, draw_person_lab
     assert crown_heights_m(np.zeros((0, 3)), cam, labels, span_m=0.4).shape == (0,)
 
 
-def test_the_rise_is_the_median_of_the_views_that_agree_with_a_head(
-    rig: Rig, draw_person_labels
-):
+def test_the_rise_is_the_median_of_the_views_that_agree_with_a_head(rig: Rig, draw_person_labels):
     skin = np.array([2.0, 2.0, 1.55])  # a neck seen from behind, 12 cm below the centre
     crown = 1.55 + 0.12 + HEAD_R
     views = [(cam, draw_person_labels(cam, skin[:2], crown, HEAD_R)) for cam in rig.cameras]
+
     def rise(views):
         return head_rises_m(skin[None], views, top_to_centre_m=HEAD_R, max_rise_m=0.2)[0]
 
