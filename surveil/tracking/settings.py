@@ -210,8 +210,9 @@ class LifecycleConfig:
         min=0.0,
     )
     unjoin_within_s: float = setting(
-        0.15,
-        "how soon after a join the modes that say its targets never met must appear, s",
+        0.5,
+        "how soon after a join the modes that say its targets never met must appear (the "
+        "weaker hand's candidate may flicker for a few frame sets first), s",
         min=0.0,
     )
     lost_level: float = setting(

@@ -1552,17 +1552,19 @@ def test_a_ghost_tracker_that_slides_into_joined_hands_is_lost_and_the_pair_part
     assert np.linalg.norm(final["p1/right_hand"] - sides[-1][1]) < 0.04
 
 
-def near_miss_frames(gap_m: float, slide_m: float):
+def near_miss_frames(gap_m: float, slide_m: float, flicker: int = 0):
     """Two people (a at x 2.0 facing b at x 3.0) raise their right hands towards each other
     and hold them ``gap_m`` apart and still (the negative scene: 27 cm). One frame set after
     they stop, a's candidate is missing and one candidate lies ``slide_m`` from b's hand
-    towards a's (their blobs touched in one view); then both candidates are back where the
+    towards a's (their blobs touched in one view); a's candidate stays missing for
+    ``flicker`` more frame sets (too weak to count); then both candidates are back where the
     hands are. Returns (frames, a's held hand, b's held hand)."""
     mid = np.array([2.5, 1.96, 1.05])
     held_a, held_b = mid - [gap_m / 2, 0, 0], mid + [gap_m / 2, 0, 0]
     frames, rest = right_hands_held_out(held_a, held_b)
     touched = held_b + slide_m * (held_a - held_b) / gap_m
-    frames += [[*rest, held_a, held_b], [*rest, touched]] + [[*rest, held_a, held_b]] * 20
+    frames += [[*rest, held_a, held_b], [*rest, touched]] + [[*rest, held_b]] * flicker
+    frames += [[*rest, held_a, held_b]] * 20
     return frames, held_a, held_b
 
 
@@ -1589,6 +1591,28 @@ def test_hands_held_near_each_other_that_never_met_are_parted_where_they_were(ri
     else:
         assert not parts
         assert all(s.phase is Phase.COMBINED for s in out[-1].targets if "right" in s.label)
+
+
+@pytest.mark.parametrize("within_s, parted", [(0.5, True), (0.15, False)])
+def test_a_never_met_pair_whose_second_hand_flickers_is_still_parted(rig, within_s, parted):
+    """As above, but a's candidate stays missing for three more frame sets after the join
+    (0.27 s: on the negative scene the weaker hand's candidate flickers under
+    separate_min_prior) before both come back where the hands stayed. The modes appear
+    within unjoin_within_s (0.5 s) of the join: the pair parts as never met. With the window
+    of 0.15 s they appear too late, and the pair would part as a handshake."""
+    frames, held_a, held_b = near_miss_frames(0.27, 0.05, flicker=3)
+    lc = LifecycleConfig(unjoin_within_s=within_s)
+    trk = MultiTargetTracker(TrackingConfig(lifecycle=lc), rig, seed=13)
+    out = run(trk, frames, np.random.default_rng(7))
+    joins = [t for f in out for t in f.transitions if t.new is Phase.COMBINED]
+    parts = [t for f in out for t in f.transitions if t.old is Phase.COMBINED]
+    assert {t.label for t in joins} == {"p1/right_hand", "p2/right_hand"}
+    if parted:
+        assert len(parts) == 2 and not any(t.met for t in parts)
+        assert _owner_of(out[-1], held_a) == "p1/right_hand"
+        assert _owner_of(out[-1], held_b) == "p2/right_hand"
+    else:
+        assert not parts
 
 
 @pytest.mark.parametrize("hand_speed_mps, back", [(2.0, True), (0.5, False)])
