@@ -50,9 +50,8 @@ def render_bodies(rig: Rig, bodies) -> dict:
             px, dist = cam.project(pts)
             hull = cv2.convexHull(np.rint(px[dist > 0]).astype(np.int32))
             cv2.fillConvexPoly(mask, hull, 1)
-        free = cv2.distanceTransform((1 - mask).astype(np.uint8), cv2.DIST_L2, 3)
         sil = Silhouettes(
-            mask.astype(np.int32), np.zeros(1), np.full(1, h - 1.0), free.astype(np.float32)
+            mask.astype(np.int32), np.zeros(1), np.full(1, h - 1.0), distance_outside_px(mask)
         )
         out[cam.name] = CameraObservation(
             cam.name, sil, np.zeros((h, w), bool), BlobSet.empty((h, w))
@@ -105,8 +104,9 @@ def draw_person(rig):
         out = {}
         for cam in rig.cameras:
             labels = person_labels(cam, centre_xy, crown_m, head_radius_m)
-            free = cv2_distance_outside(labels)
-            sil = Silhouettes(labels, np.zeros(1), np.full(1, cam.height - 1.0), free)
+            sil = Silhouettes(
+                labels, np.zeros(1), np.full(1, cam.height - 1.0), distance_outside_px(labels)
+            )
             out[cam.name] = CameraObservation(
                 cam.name, sil, np.zeros(labels.shape, bool), BlobSet.empty(labels.shape)
             )
@@ -115,8 +115,9 @@ def draw_person(rig):
     return draw
 
 
-def cv2_distance_outside(labels: np.ndarray) -> np.ndarray:
-    """(H, W) float32 distance of every pixel to the nearest silhouette pixel, px."""
+def distance_outside_px(labels: np.ndarray) -> np.ndarray:
+    """(H, W) float32 distance of every pixel to the nearest silhouette pixel, px
+    (``Silhouettes.dist_outside_px``)."""
     import cv2
 
     return cv2.distanceTransform((labels == 0).astype(np.uint8), cv2.DIST_L2, 3)
