@@ -281,6 +281,11 @@ class Pipeline:
             self.rig,
             self.cfg.candidates,
             expected_m=self.tracker.expected_hands(fs.t_ns),
+            crowns_m=(
+                self.tracker.expected_crowns(fs.t_ns)
+                if self.cfg.candidates.tops_from_heads
+                else None
+            ),
         )
         if feed:
             candidates = with_arm_hands(

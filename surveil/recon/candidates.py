@@ -69,6 +69,56 @@ def floor_relative_v(
     return (v_px - top_px) / np.maximum(bottom - top_px, 1.0)
 
 
+def merged_tops(
+    points_m: np.ndarray,
+    cams: np.ndarray,
+    silhouettes: np.ndarray,
+    top_px: np.ndarray,
+    crowns_m: np.ndarray,
+    rig: Rig,
+    by_cam: Mapping[int, CameraObservation],
+    head_drop_m: float = 0.12,
+) -> np.ndarray:
+    """(N,) the silhouette top row for p_o of each blob: where its silhouette holds two or
+    more tracked heads (people merged in that view), the row of the crown of the one
+    nearest to Z horizontally; elsewhere ``top_px``.
+
+    A head is in a silhouette when the point ``head_drop_m`` under its crown (its centre)
+    projects onto it.
+
+    Parameters
+    ----------
+    points_m : (N, 3) float -- the candidate Z each blob takes part in, m
+    cams : (N,) int -- rig index of the blob's camera
+    silhouettes : (N,) int -- the blob's silhouette label (0 none)
+    top_px : (N,) float -- its silhouette's top row, px
+    crowns_m : (H, 3) float -- the tracked heads' crowns, m
+    rig : Rig
+    by_cam : rig index -> that camera's observation
+    """
+    out = np.array(top_px, dtype=np.float64)
+    centres = np.asarray(crowns_m, dtype=np.float64) - [0.0, 0.0, head_drop_m]
+    horiz = np.linalg.norm(points_m[:, None, :2] - centres[None, :, :2], axis=2)  # (N, H)
+    for m in np.unique(cams).tolist():
+        cam = rig.cameras[m]
+        labels = by_cam[m].silhouettes.labels
+        px, depth = cam.project(centres)
+        crown_v = cam.project(np.asarray(crowns_m, dtype=np.float64))[0][:, 1]
+        seen = cam.in_image(px, depth)
+        head_sil = np.zeros(len(centres), dtype=np.int64)
+        uv = np.rint(px[seen]).astype(np.int64)
+        head_sil[seen] = labels[uv[:, 1], uv[:, 0]]
+        sel = np.flatnonzero(cams == m)
+        inside = (head_sil[None, :] == silhouettes[sel, None]) & (silhouettes[sel, None] > 0)
+        merged = inside.sum(axis=1) >= 2
+        if not merged.any():
+            continue
+        d = np.where(inside, horiz[sel], np.inf)
+        nearest = d.argmin(axis=1)
+        out[sel[merged]] = crown_v[nearest[merged]]
+    return out
+
+
 def blob_rows(obs: CameraObservation) -> tuple[np.ndarray, np.ndarray]:
     """(B,) row of every blob's centroid and (B,) top row of its silhouette, px (0, the
     frame's top, for a blob outside every silhouette)."""
@@ -307,6 +357,7 @@ def make_candidates(
     cfg: CandidateConfig,
     *,
     expected_m: np.ndarray | None = None,
+    crowns_m: np.ndarray | None = None,
 ) -> CandidateSet:
     """3-D candidate points of one frame set with their priors p(Z).
 
@@ -325,6 +376,10 @@ def make_candidates(
         would otherwise have none (:func:`rescue_expected`, ``cfg.expected_radius_m``), and
         a candidate within ``cfg.expected_gate_m`` of one needs only
         ``cfg.expected_prior_threshold`` on its product.
+    crowns_m : (H, 3) float or None
+        The tracked heads' crowns (tops), m (the tracker's feedback): with
+        ``cfg.tops_from_heads``, the top of a silhouette holding two or more of them is, for
+        p_o, the crown of the one nearest to Z (:func:`merged_tops`).
 
     Returns
     -------
@@ -428,12 +483,14 @@ def make_candidates(
     if cfg.rel_v_to_floor:
         # both blobs' rows at once: one floor projection per camera
         both = np.concatenate([ia, ib])
-        d_v = np.split(
-            floor_relative_v(
-                np.concatenate([points, points]), cam_all[both], *rows_all[both].T, rig
-            ),
-            2,
-        )
+        twice = np.concatenate([points, points])
+        v_px, top_px = rows_all[both].T
+        if cfg.tops_from_heads and crowns_m is not None and len(crowns_m) >= 2:
+            sil_all = np.concatenate([by_cam[m].blobs.silhouette for m in seen])
+            top_px = merged_tops(
+                twice, cam_all[both], sil_all[both], top_px, crowns_m, rig, by_cam
+            )
+        d_v = np.split(floor_relative_v(twice, cam_all[both], v_px, top_px, rig), 2)
     else:
         d_v = [rel_v_all[ia], rel_v_all[ib]]
     p_o = gauss_term(d_v[0] - d_v[1], cfg.sigma_rel_v)

@@ -24,6 +24,12 @@ class CandidateConfig:
         "silhouette's bottom row, which is not the feet where legs are hidden (behind a table, "
         "by another person, in a late camera); not in the paper (docs/candidates.md)",
     )
+    tops_from_heads: bool = setting(
+        False,
+        "p_o takes the top of a silhouette that holds two or more tracked heads from the "
+        "crown of the head nearest to Z (the tracker's feedback) instead of the silhouette's "
+        "top row, which there is the tallest person's (docs/candidates.md)",
+    )
     sigma_gap_m: float = setting(
         0.02, "p_t width (eq. 26): std of the half gap d between lines of sight, m", min=1e-6
     )

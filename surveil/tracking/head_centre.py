@@ -19,6 +19,10 @@ import numpy as np
 
 from surveil.camera import Camera
 
+# an adult head's crown (with its hair) above the head's centre: about 23 cm from chin to
+# crown, plus about 1 cm of hair, m (docs/tracking.md, "Head centre")
+CROWN_TO_CENTRE_M = 0.125
+
 # half-width of the image columns searched for the crown, at the head's depth, m: inside a
 # head (half-width about 7.5 cm), so that a neighbour's head or a hand beside it is not read
 CROWN_HALF_WIDTH_M = 0.05

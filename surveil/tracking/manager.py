@@ -45,7 +45,7 @@ from surveil.datatypes import (
 )
 from surveil.tracking import labelling as lab
 from surveil.tracking import sir
-from surveil.tracking.head_centre import head_rises_m
+from surveil.tracking.head_centre import CROWN_TO_CENTRE_M, head_rises_m
 from surveil.tracking.lifecycle import Evidence, next_phase
 from surveil.tracking.settings import TrackingConfig
 
@@ -2303,6 +2303,21 @@ class MultiTargetTracker:
             and tr.is_hand is not False
             and not (limit and tr.phase is Phase.COMBINED and tr.rescued_frames >= limit)
         ]
+        return np.array(out).reshape(-1, 3)
+
+    def expected_crowns(self, t_ns: int) -> np.ndarray:
+        """(H, 3) where the crowns (tops) of the active trackers labelled heads are predicted
+        to be at time ``t_ns``, m: their reported centres raised by ``head_top_to_centre_m``
+        (the candidate stage's feedback for p_o where people's silhouettes merge)."""
+        dt_s = max(self._step_s(int(t_ns)), 0.0)
+        rise_top = self.cfg.head_top_to_centre_m or CROWN_TO_CENTRE_M
+        out = []
+        for tr in self._tracks.values():
+            if tr.limb is Limb.HEAD and tr.phase in ACTIVE:
+                crown = tr.mean_m + tr.vel_mps * dt_s
+                rise = self.cfg.head_centre_rise_m if tr.head_rise_m is None else tr.head_rise_m
+                crown[2] += rise + rise_top
+                out.append(crown)
         return np.array(out).reshape(-1, 3)
 
     @property

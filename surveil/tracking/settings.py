@@ -18,6 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from surveil.config import setting
+from surveil.tracking.head_centre import CROWN_TO_CENTRE_M
 
 
 @dataclass(frozen=True, slots=True)
@@ -574,7 +575,7 @@ class TrackingConfig:
         max=0.2,
     )
     head_top_to_centre_m: float = setting(
-        0.125,
+        CROWN_TO_CENTRE_M,
         "a head's centre lies this far below the top of its silhouettes (the crown with its "
         "hair: an adult head is about 23 cm from chin to crown); the rise of each head above "
         "its skin point is measured from the silhouettes with it (0 = off: always "

@@ -461,3 +461,50 @@ def test_config_rejects_out_of_range_values_by_key():
     with pytest.raises(ConfigError, match="recon.sigma_gap_m must be >= "):
         from_table(CandidateConfig, {"sigma_gap_m": 0.0}, "run.toml: recon")
     assert from_table(CandidateConfig, {"merge_boost": 0.2}, "x").merge_boost == 0.2
+
+
+def _people(cam: Camera, crowns_m: np.ndarray, blobs_m: np.ndarray) -> CameraObservation:
+    """People standing under ``crowns_m`` (x, y, crown height), all in one silhouette (as
+    where they overlap in a view), with skin blobs at ``blobs_m``; rel_v down to the
+    silhouette's bottom row."""
+    mask = np.zeros((H, W), np.uint8)
+    for x, y, z in crowns_m:
+        ends = cam.project(np.array([[x, y, z], [x, y, 0.0]]))[0]
+        cv2.line(mask, *(tuple(int(c) for c in np.rint(p)) for p in ends), 255, 16)
+    rows = np.flatnonzero(mask.any(axis=1))
+    top, bottom = float(rows.min()), float(rows.max())
+    dist = cv2.distanceTransform((mask == 0).astype(np.uint8), cv2.DIST_L2, 5)
+    sil = Silhouettes((mask > 0).astype(np.int32), np.array([top]), np.array([bottom]), dist)
+    px = cam.project(blobs_m)[0]
+    n = len(blobs_m)
+    blobs = BlobSet(
+        centroids_px=px,
+        areas_px=np.full(n, 50, np.int64),
+        bboxes_px=np.zeros((n, 4), np.int32),
+        silhouette=np.ones(n, np.int32),
+        rel_v=(px[:, 1] - top) / (bottom - top),
+        labels=np.zeros((H, W), np.int32),
+    )
+    return CameraObservation(cam.name, sil, np.zeros((H, W), bool), blobs)
+
+
+def test_a_hand_in_a_silhouette_merged_with_a_taller_person_takes_its_own_heads_top():
+    """cam1 sees a 1.6 m person's hand in one silhouette with a 1.95 m person farther away
+    behind him: the silhouette's top row is the farther head's, the hand sits much lower in
+    it than in cam0, where the short person stands alone, and p_o rejects the pair. With the
+    tracked heads' crowns (tops_from_heads) the top is the crown of the head nearest to the
+    hand, and the pair is kept; with one crown in the silhouette nothing changes."""
+    rig = _rig(2)
+    short, tall = np.array([3.0, 2.0, 1.6]), np.array([1.0, 3.4, 1.95])
+    hand = np.array([[3.0, 2.05, 1.1]])
+    obs = [
+        _people(rig.cameras[0], short[None], hand),
+        _people(rig.cameras[1], np.array([short, tall]), hand),
+    ]
+    on = dataclasses.replace(CFG, tops_from_heads=True)
+    crowns = np.array([short, tall])
+    assert len(make_candidates(obs, rig, CFG, crowns_m=crowns).points_m) == 0
+    assert len(make_candidates(obs, rig, on, crowns_m=crowns[:1]).points_m) == 0
+    cs = make_candidates(obs, rig, on, crowns_m=crowns)
+    np.testing.assert_allclose(cs.points_m, hand, atol=1e-6)
+    assert cs.prior[0] > 0.7

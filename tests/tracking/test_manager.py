@@ -244,6 +244,10 @@ def test_a_head_is_reported_below_the_crown_its_silhouettes_show(
     head = by_label(out[-1])["p1/head"]
     want = centre_z if top_to_centre_m > 0 else a["head"][2] + cfg.head_centre_rise_m
     assert abs(head[2] - want) < 0.02
+    # the candidate stage's feedback: the crown, head_top_to_centre_m above the centre
+    crowns = trk.expected_crowns(40 * DT_NS)
+    assert crowns.shape == (1, 3)
+    assert abs(crowns[0, 2] - (head[2] + (top_to_centre_m or 0.125))) < 0.01
     # the hands are where their skin is
     assert np.linalg.norm(by_label(out[-1])["p1/left_hand"] - a["left_hand"]) < 0.03
 
