@@ -284,10 +284,19 @@ def _standing(cam: Camera, at_m, blobs_m: np.ndarray, hidden_below_m: float = 0.
     """A person 1.8 m tall standing at ``at_m`` (x, y), seen by ``cam`` down to
     ``hidden_below_m`` (a table in front hides the rest), with skin blobs at ``blobs_m``;
     rel_v as the blob stage measures it, down to the silhouette's bottom row."""
-    x, y = at_m
-    ends = cam.project(np.array([[x, y, 1.8], [x, y, hidden_below_m]]))[0]
+    return _people(cam, np.array([[*at_m, 1.8]]), blobs_m, hidden_below_m)
+
+
+def _people(
+    cam: Camera, crowns_m: np.ndarray, blobs_m: np.ndarray, hidden_below_m: float = 0.0
+) -> CameraObservation:
+    """People standing under ``crowns_m`` (x, y, crown height), seen down to
+    ``hidden_below_m``, all in one silhouette (as where they overlap in a view), with skin
+    blobs at ``blobs_m``; rel_v down to the silhouette's bottom row."""
     mask = np.zeros((H, W), np.uint8)
-    cv2.line(mask, *(tuple(int(c) for c in np.rint(p)) for p in ends), 255, 16)
+    for x, y, z in crowns_m:
+        ends = cam.project(np.array([[x, y, z], [x, y, hidden_below_m]]))[0]
+        cv2.line(mask, *(tuple(int(c) for c in np.rint(p)) for p in ends), 255, 16)
     rows = np.flatnonzero(mask.any(axis=1))
     top, bottom = float(rows.min()), float(rows.max())
     dist = cv2.distanceTransform((mask == 0).astype(np.uint8), cv2.DIST_L2, 5)
@@ -461,31 +470,6 @@ def test_config_rejects_out_of_range_values_by_key():
     with pytest.raises(ConfigError, match="recon.sigma_gap_m must be >= "):
         from_table(CandidateConfig, {"sigma_gap_m": 0.0}, "run.toml: recon")
     assert from_table(CandidateConfig, {"merge_boost": 0.2}, "x").merge_boost == 0.2
-
-
-def _people(cam: Camera, crowns_m: np.ndarray, blobs_m: np.ndarray) -> CameraObservation:
-    """People standing under ``crowns_m`` (x, y, crown height), all in one silhouette (as
-    where they overlap in a view), with skin blobs at ``blobs_m``; rel_v down to the
-    silhouette's bottom row."""
-    mask = np.zeros((H, W), np.uint8)
-    for x, y, z in crowns_m:
-        ends = cam.project(np.array([[x, y, z], [x, y, 0.0]]))[0]
-        cv2.line(mask, *(tuple(int(c) for c in np.rint(p)) for p in ends), 255, 16)
-    rows = np.flatnonzero(mask.any(axis=1))
-    top, bottom = float(rows.min()), float(rows.max())
-    dist = cv2.distanceTransform((mask == 0).astype(np.uint8), cv2.DIST_L2, 5)
-    sil = Silhouettes((mask > 0).astype(np.int32), np.array([top]), np.array([bottom]), dist)
-    px = cam.project(blobs_m)[0]
-    n = len(blobs_m)
-    blobs = BlobSet(
-        centroids_px=px,
-        areas_px=np.full(n, 50, np.int64),
-        bboxes_px=np.zeros((n, 4), np.int32),
-        silhouette=np.ones(n, np.int32),
-        rel_v=(px[:, 1] - top) / (bottom - top),
-        labels=np.zeros((H, W), np.int32),
-    )
-    return CameraObservation(cam.name, sil, np.zeros((H, W), bool), blobs)
 
 
 def test_a_hand_in_a_silhouette_merged_with_a_taller_person_takes_its_own_heads_top():
