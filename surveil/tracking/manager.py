@@ -317,6 +317,7 @@ class MultiTargetTracker:
         used |= self._return_drifted(seeds, used | weak)
         used |= self._split_on_seeds(seeds, used | weak)
         used |= self._split_out_of_reach(seeds, used | weak)
+        used |= self._return_slid_hands(seeds, used | weak)
         self._split_on_third_hand(t_ns)
         self._split_on_home_hand(t_ns)
         rel_v = self._candidate_rel_v(candidates, observations)
@@ -497,7 +498,9 @@ class MultiTargetTracker:
             if a.id in pairs or b.id in pairs or a.id in drifted or b.id in drifted:
                 continue
             bad = [tr for tr in (a, b) if tr.since_miss < lc.drift_window_frames]
-            met = hands[k] and any(self._met(x, y) for x, y in ((a, b), (b, a)) if x in bad)
+            # a hand raised to its own face merges with the head's blob in the same way
+            meets = hands[k] or self._head_and_own_hand(a, b) is not None
+            met = meets and any(self._met(x, y) for x, y in ((a, b), (b, a)) if x in bad)
             stray = [tr for tr in (a, b) if tr.stray]
             if len(stray) == 1 and (a if stray[0] is b else b).person > 0:
                 # a tracker that never joined a person meets one that did: it is a duplicate
@@ -829,6 +832,96 @@ class MultiTargetTracker:
                 log.debug("t%d back on its target at %s", back.id, sd.position_m.round(2))
         return out
 
+    def _return_slid_hands(self, seeds: list[_Pending], used: set[int]) -> set[int]:
+        """Put labelled hands' trackers that slid up their arm back on the hand; returns the
+        seeds used.
+
+        A bare forearm, or a shirt patch beside a hand, gives a candidate 15-30 cm from the
+        hand towards the body. When the hand's own candidate is missing for a few frame sets
+        the tracker slides onto that one, and when the hand's candidate comes back it becomes
+        a seed: started there, a new tracker would take the hand from the labelled one (an
+        identity switch; negative scene, bare-forearm option on: in all six seeds). So a
+        confirmed seed goes back to a person's hand (normal) when
+
+        - it is within ``slid_hand_gate_m`` of the hand's estimate and farther from the
+          person's head, by ``slid_hand_gain_m``: farther out along the arm;
+        - relative to the head, the tracker stood there (``slid_hand_stood_m``) within the
+          last ``slid_hand_within_s``: the hand is where it was, the tracker moved (relative
+          to the head, because the person may walk meanwhile);
+        - the head is tracked, the seed within its ``arm_reach_m`` and not nearer another
+          tracked head by ``person_margin_m``, and the person's other hand tracked (normal
+          or combined) and farther from the seed: it is not the other hand, nor someone
+          else's.
+
+        The hand's tracker is drawn again around the seed."""
+        lc, lcfg = self.cfg.lifecycle, self.cfg.labelling
+        out: set[int] = set()
+        if lc.slid_hand_gate_m <= 0 or self._last_t_ns is None:
+            return out
+        hands = [
+            tr
+            for tr in self._tracks.values()
+            if tr.phase is Phase.NORMAL and tr.labelled and tr.limb.is_hand
+        ]
+        heads = {p: h for p in self._persons if (h := self._active_head(p)) is not None}
+        since_ns = self._last_t_ns - int(lc.slid_hand_within_s * 1e9)
+        for i, sd in enumerate(seeds):
+            if i in used or sd.count < lc.init_confirm_frames:
+                continue
+            best: tuple[float, _Track] | None = None
+            for tr in hands:
+                head = heads.get(tr.person)
+                d = float(np.linalg.norm(sd.position_m - tr.mean_m))
+                if head is None or d > lc.slid_hand_gate_m or (best and best[0] <= d):
+                    continue
+                out_m = float(np.linalg.norm(sd.position_m - head.mean_m))
+                tr_out_m = float(np.linalg.norm(tr.mean_m - head.mean_m))
+                if out_m < tr_out_m + lc.slid_hand_gain_m or out_m > lcfg.arm_reach_m:
+                    continue
+                if any(
+                    np.linalg.norm(sd.position_m - h.mean_m) + lcfg.person_margin_m <= out_m
+                    for p, h in heads.items()
+                    if p != tr.person
+                ):
+                    continue
+                if not self._other_hand_farther(tr, sd.position_m, d):
+                    continue
+                if self._stood_on_body(tr, head, sd.position_m, since_ns):
+                    best = (d, tr)
+            if best is not None:
+                tr = best[1]
+                self._reinit(tr, sd.position_m, sd.velocity_mps)
+                hands.remove(tr)
+                out.add(i)
+                log.debug("t%d slid back to its hand at %s", tr.id, sd.position_m.round(2))
+        return out
+
+    def _other_hand_farther(self, tr: _Track, point_m: np.ndarray, d_m: float) -> bool:
+        """Whether the other hand of ``tr``'s person is tracked (normal or combined) and
+        farther than ``d_m`` from ``point_m``."""
+        person = self._persons.get(tr.person)
+        others = [
+            o
+            for tid in (person.hand_ids if person is not None else [])
+            if tid != tr.id and (o := self._tracks.get(tid)) is not None
+        ]
+        return bool(others) and all(
+            o.phase in (Phase.NORMAL, Phase.COMBINED)
+            and float(np.linalg.norm(o.mean_m - point_m)) > d_m
+            for o in others
+        )
+
+    def _stood_on_body(self, tr: _Track, head: _Track, point_m: np.ndarray, since_ns: int) -> bool:
+        """Whether, relative to its person's head, ``tr`` stood within ``slid_hand_stood_m``
+        of where ``point_m`` is relative to the head now, at a time since ``since_ns``."""
+        head_at = dict(head.history)
+        rel = point_m - head.mean_m
+        reach = self.cfg.lifecycle.slid_hand_stood_m
+        return any(
+            t >= since_ns and t in head_at and float(np.linalg.norm(m - head_at[t] - rel)) <= reach
+            for t, m in tr.history
+        )
+
     def _split_on_seeds(self, seeds: list[_Pending], used: set[int]) -> set[int]:
         """Part combined pairs on confirmed seeds near them; returns the seeds used.
 
@@ -844,7 +937,11 @@ class MultiTargetTracker:
         seed is confirmed, and after a handshake the pair follows the other hand away in the
         opposite direction (demo: 54 cm when the seed appeared, 75 cm from where the pair
         then was two frame sets later). A seed that was already there as the pair joined
-        (:meth:`_there_as_pair_joined`) is not one of its targets."""
+        (:meth:`_there_as_pair_joined`) is not one of its targets. A pair of a person's head
+        and own hand (a hand raised to the face) parts on a seed anywhere within
+        ``arm_reach_m`` of it, and the head takes the higher mode: the hand can drop from the
+        face to the hip, 75 cm, faster than the gate follows (negative scene with the
+        bare-forearm option, p2 at 9 s)."""
         lc = self.cfg.lifecycle
         out: set[int] = set()
         parted: set[int] = set()
@@ -863,6 +960,10 @@ class MultiTargetTracker:
             fit = np.array(
                 [self._parting_fit(heads, tr.mean_m, seeds[i].position_m) for i in free]
             )
+            head_first = self._head_and_own_hand(tr, other)
+            if head_first is not None:
+                # a person's hand is never beyond arm's reach of their head
+                fit = np.where(d <= self.cfg.labelling.arm_reach_m, 2, 0)
             ok = (
                 (d >= lc.separate_distance_m)
                 & (fit > 0)
@@ -874,7 +975,10 @@ class MultiTargetTracker:
             confirmed = np.array([seeds[i].count >= lc.init_confirm_frames for i in free])
             if not (ok & confirmed).any():
                 continue
-            both = self._both_leaving(tr, heads, [seeds[free[j]] for j in np.flatnonzero(ok)])
+            both = None
+            if head_first is None:
+                both = self._both_leaving(tr, heads, [seeds[free[j]] for j in np.flatnonzero(ok)])
+            fixed: tuple[int | None, int | None] = (None, None)
             if both is not None:
                 picked = [free[j] for j in np.flatnonzero(ok)[list(both)]]
                 modes = np.array([seeds[i].position_m for i in picked])
@@ -884,12 +988,22 @@ class MultiTargetTracker:
                 seed = seeds[picked[0]]
                 modes = np.array([tr.mean_m, seed.position_m])
                 vels = np.array([tr.vel_mps, seed.velocity_mps])
+                if head_first is not None:  # the head takes the higher mode
+                    high = int(modes[1, 2] > modes[0, 2])
+                    fixed = (high, 1 - high) if head_first else (1 - high, high)
             free = [i for i in free if i not in picked]
-            self._part((tr, other), modes, vels)
+            self._part((tr, other), modes, vels, fixed)
             out.update(picked)
             parted.update((tr.id, other.id))
             log.debug("t%d / t%d part on new candidates at %s", tr.id, other.id, modes)
         return out
+
+    def _head_and_own_hand(self, a: _Track, b: _Track) -> bool | None:
+        """True when ``a`` is a person's head and ``b`` one of that person's hands, False
+        the other way round, None for any other pair."""
+        if a.person == 0 or a.person != b.person or {a.is_hand, b.is_hand} != {True, False}:
+            return None
+        return b.is_hand is True
 
     def _both_leaving(
         self, pair: _Track, heads: np.ndarray | None, seeds: list[_Pending]

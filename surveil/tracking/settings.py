@@ -216,6 +216,25 @@ class LifecycleConfig:
         "weaker hand's candidate may flicker for a few frame sets first), s",
         min=0.0,
     )
+    slid_hand_gate_m: float = setting(
+        0.5,
+        "a labelled hand's tracker within this of a confirmed seed that lies farther out from "
+        "its head (by slid_hand_gain_m) where, relative to that head, the tracker itself stood "
+        "within slid_hand_within_s (slid_hand_stood_m), slid up its arm or onto its shirt: it "
+        "is drawn again around the seed instead of a new tracker starting there (0 = off), m",
+        min=0.0,
+    )
+    slid_hand_gain_m: float = setting(
+        0.05, "see slid_hand_gate_m: how much farther from the head the seed must be, m", min=0.0
+    )
+    slid_hand_within_s: float = setting(
+        1.5, "see slid_hand_gate_m: how recently the tracker stood there, s", min=0.0
+    )
+    slid_hand_stood_m: float = setting(
+        0.12,
+        "see slid_hand_gate_m: how close, relative to the head, the tracker stood to the seed, m",
+        min=0.0,
+    )
     lost_level: float = setting(
         0.05,
         "a tracker whose best particle's support max_i sum_c exp(-d_ic^2/2s^2) p(Z_c) stays "

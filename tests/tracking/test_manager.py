@@ -1827,3 +1827,86 @@ def test_a_hand_seen_again_only_at_home_parts_the_pair_it_left(rig, rng, wait_s)
     else:
         assert not parted
         assert not _owner_of(out[-1], b["right_hand"]).startswith(f"p{pb}/")
+
+
+def walking_with_a_bare_forearm(hidden: int, back: int, n: int):
+    """One person walking along x at 0.5 m/s. From frame ``hidden`` the left hand's own
+    candidate is missing while one on its bare forearm rises over 6 frames to 20 cm above
+    it; from ``back`` the hand's candidate shows again beside it, and from ``back`` + 8 the
+    forearm's is gone. Returns the frames and the left hand's path."""
+    p = body((1.5, 2.0), 0.0)
+    step = np.array([0.5 * DT_NS * 1e-9, 0.0, 0.0])
+    up = np.array([0.0, 0.0, 0.2])
+    frames, left = [], []
+    for k in range(n):
+        shift = k * step
+        hand = p["left_hand"] + shift
+        pts = [p["head"] + shift, p["right_hand"] + shift]
+        if hidden <= k < back + 8:
+            pts.append(hand + min((k - hidden + 1) / 6, 1.0) * up)
+        if not hidden <= k < back:
+            pts.append(hand)
+        frames.append(pts)
+        left.append(hand)
+    return frames, left
+
+
+@pytest.mark.parametrize("gate_m", [0.5, 0.0])
+def test_a_hand_tracker_that_slid_up_its_bare_forearm_is_put_back_on_the_hand(rig, rng, gate_m):
+    """A walking person's left hand loses its candidate for 10 frame sets while one on its
+    bare forearm, 20 cm up, stays (the bare-forearm option: p2 of the negative scene, in all
+    six seeds at 4.5 s), and its tracker slides up onto it. When the hand's candidate shows
+    again, it lies where the tracker stood relative to the head, farther out from the head:
+    the hand's own tracker is put back on it and keeps its label. With the rule off
+    (``slid_hand_gate_m`` 0) a new tracker takes the hand."""
+    hidden, back = 40, 50
+    frames, left = walking_with_a_bare_forearm(hidden, back, 75)
+    cfg = TrackingConfig(lifecycle=LifecycleConfig(slid_hand_gate_m=gate_m))
+    out = run(MultiTargetTracker(cfg, rig, seed=5), frames, rng)
+    before = next(s for s in out[hidden - 1].targets if s.label == "p1/left_hand")
+    assert np.linalg.norm(before.mean_m - left[hidden - 1]) < 0.05
+    slid = next(s for s in out[back - 1].targets if s.target_id == before.target_id)
+    assert np.linalg.norm(slid.mean_m - left[back - 1]) > 0.12  # it followed the forearm up
+    near = min(out[-1].targets, key=lambda s: np.linalg.norm(s.mean_m - left[-1]))
+    assert np.linalg.norm(near.mean_m - left[-1]) < 0.05
+    if gate_m > 0:
+        assert near.target_id == before.target_id and near.label == "p1/left_hand"
+    else:
+        assert near.target_id != before.target_id
+
+
+@pytest.mark.parametrize("covered", [False, True])
+def test_a_hand_dropped_fast_from_the_face_parts_from_the_head(rig, rng, covered):
+    """A person raises the left hand to the face and holds it there: the two trackers
+    combine, whether the hand's candidate merges with the head's or hides it from 40 cm
+    away (the head's tracker then loses its support as the hand comes to it: they met, it
+    has not drifted onto the hand, as with two hands meeting; without that, the head is
+    lost and the two labels end up swapped). Then the hand drops back to the hip in
+    0.2 s, unseen on the way. Its candidate shows again 0.9 m from the pair, beyond
+    ``pair_seed_gate_m``; a person's hand is within arm's reach of the head, so the pair
+    parts on it: the hand's tracker takes it with its label and the head's stays on the head
+    (negative scene, bare-forearm option on, p2 at 9 s: a new tracker took the hand, and in
+    seed 5 the head's tracker was lost as drifted)."""
+    p = body((2.0, 2.0), 0.0)
+    face = p["head"] + 0.06 * p["fwd"] - [0.0, 0.0, 0.05]
+    rest = [p["head"], p["left_hand"], p["right_hand"]]
+    frames = [list(rest) for _ in range(30)]
+    for k in range(1, 7):
+        hand = p["left_hand"] + k / 6 * (face - p["left_hand"])
+        if covered and np.linalg.norm(hand - p["head"]) < 0.4:  # the hand hides the face
+            frames.append([hand, p["right_hand"]])
+        else:
+            frames.append(merged([p["head"], hand, p["right_hand"]]))
+    at_face = [face, p["right_hand"]] if covered else merged([p["head"], face, p["right_hand"]])
+    frames += [list(at_face) for _ in range(15)]
+    frames += [[p["head"], p["right_hand"]] for _ in range(3)]  # dropping, unseen
+    frames += [list(rest) for _ in range(25)]
+    out = run(MultiTargetTracker(LONE, rig, seed=3), frames, rng)
+    ids = {s.label: s.target_id for s in out[29].targets}
+    assert any(t.new is Phase.COMBINED for f in out[30:51] for t in f.transitions)
+    assert not any(t.new is Phase.LOST for f in out[30:] for t in f.transitions)
+    final = {s.label: s for s in out[-1].targets}
+    hand, head = final["p1/left_hand"], final["p1/head"]
+    assert hand.target_id == ids["p1/left_hand"] and head.target_id == ids["p1/head"]
+    assert np.linalg.norm(hand.mean_m - p["left_hand"]) < 0.05
+    assert np.linalg.norm(head.mean_m[:2] - p["head"][:2]) < 0.05  # (reported above its skin)
