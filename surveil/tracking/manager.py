@@ -868,11 +868,11 @@ class MultiTargetTracker:
         for i, sd in enumerate(seeds):
             if i in used or sd.count < lc.init_confirm_frames:
                 continue
-            best: tuple[float, _Track] | None = None
+            best, best_d = None, lc.slid_hand_gate_m  # the nearest such hand
             for tr in hands:
                 head = heads.get(tr.person)
                 d = float(np.linalg.norm(sd.position_m - tr.mean_m))
-                if head is None or d > lc.slid_hand_gate_m or (best and best[0] <= d):
+                if head is None or d > best_d:
                     continue
                 out_m = float(np.linalg.norm(sd.position_m - head.mean_m))
                 tr_out_m = float(np.linalg.norm(tr.mean_m - head.mean_m))
@@ -887,13 +887,12 @@ class MultiTargetTracker:
                 if not self._other_hand_farther(tr, sd.position_m, d):
                     continue
                 if self._stood_on_body(tr, head, sd.position_m, since_ns):
-                    best = (d, tr)
+                    best, best_d = tr, d
             if best is not None:
-                tr = best[1]
-                self._reinit(tr, sd.position_m, sd.velocity_mps)
-                hands.remove(tr)
+                self._reinit(best, sd.position_m, sd.velocity_mps)
+                hands.remove(best)
                 out.add(i)
-                log.debug("t%d slid back to its hand at %s", tr.id, sd.position_m.round(2))
+                log.debug("t%d slid back to its hand at %s", best.id, sd.position_m.round(2))
         return out
 
     def _other_hand_farther(self, tr: _Track, point_m: np.ndarray, d_m: float) -> bool:
@@ -957,12 +956,12 @@ class MultiTargetTracker:
             d = np.array([np.linalg.norm(seeds[i].position_m - tr.mean_m) for i in free])
             d0 = np.array([seeds[i].pair_first_m.get(tr.id, np.inf) for i in free])
             heads = self._owner_heads(tr, other)
-            fit = np.array(
-                [self._parting_fit(heads, tr.mean_m, seeds[i].position_m) for i in free]
-            )
             head_first = self._head_and_own_hand(tr, other)
-            if head_first is not None:
-                # a person's hand is never beyond arm's reach of their head
+            if head_first is None:
+                fit = np.array(
+                    [self._parting_fit(heads, tr.mean_m, seeds[i].position_m) for i in free]
+                )
+            else:  # a person's hand is never beyond arm's reach of their head
                 fit = np.where(d <= self.cfg.labelling.arm_reach_m, 2, 0)
             ok = (
                 (d >= lc.separate_distance_m)

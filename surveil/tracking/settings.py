@@ -228,7 +228,10 @@ class LifecycleConfig:
         0.05, "see slid_hand_gate_m: how much farther from the head the seed must be, m", min=0.0
     )
     slid_hand_within_s: float = setting(
-        1.5, "see slid_hand_gate_m: how recently the tracker stood there, s", min=0.0
+        1.5,
+        "see slid_hand_gate_m: how recently the tracker stood there (at most its estimate "
+        "history, 30 frame sets: 2 s at 15 fps), s",
+        min=0.0,
     )
     slid_hand_stood_m: float = setting(
         0.12,
