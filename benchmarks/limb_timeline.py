@@ -56,14 +56,20 @@ def timeline_rows(
         if not np.isfinite(x).all():
             rows.append(f"{t_s:6.2f} | not in the room")
             continue
-        here = run.target_frame == m
+        here = run.frame_rows(m)
         d = np.linalg.norm(run.target_pos_m[here] - x, axis=1)
         ids, labels = run.target_tracker[here], run.target_label[here]
         phases = [PHASE_OF_CODE.get(int(c), "?") for c in run.target_state[here]]
         trackers = " ".join(
             f"t{ids[k]}:{labels[k]}:{phases[k]}@{1000 * d[k]:.0f}" for k in np.argsort(d)[:near]
         )
-        cand = run.candidate_frame == m
+        # /candidates messages are matched by time: a set may have targets and no candidates
+        c = int(np.searchsorted(run.candidate_t_ns, t_ns))
+        cand = (
+            run.candidate_rows(c)
+            if c < len(run.candidate_t_ns) and run.candidate_t_ns[c] == t_ns
+            else slice(0, 0)
+        )
         c_pos, c_prior = run.candidate_pos_m[cand], run.candidate_prior[cand]
         dc = np.linalg.norm(c_pos - x, axis=1)
         cands = " ".join(
