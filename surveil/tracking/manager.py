@@ -310,9 +310,10 @@ class MultiTargetTracker:
         self._measure_separation(pts, prior, dt_s, t_ns)
         seeds = self._update_seeds(pts, prior, dt_s, t_ns)
         reacquired = self._reacquire(seeds, t_ns)
+        used = set(reacquired.values())  # seeds taken: no tracker starts on them
+        reacquired = self._restart_unsupported(reacquired, seeds)
         strong = [sd for sd in seeds if sd.count > 0]
         merged = self._merge_lost(t_ns, reacquired, pairs, strong)
-        used = set(reacquired.values())  # seeds taken: no tracker starts on them
         weak = {i for i, sd in enumerate(seeds) if sd.count == 0}  # they only re-acquire
         used |= self._return_drifted(seeds, used | weak)
         used |= self._split_on_seeds(seeds, used | weak)
@@ -895,6 +896,15 @@ class MultiTargetTracker:
                 log.debug("t%d slid back to its hand at %s", best.id, sd.position_m.round(2))
         return out
 
+    @staticmethod
+    def _before_miss_m(tr: _Track) -> np.ndarray:
+        """Where ``tr`` stood when it was last supported before its latest miss began (a
+        tracker that slid onto something is supported again there)."""
+        for t, m in reversed(tr.history):
+            if t <= tr.miss_from_ns:
+                return m
+        return tr.last_good_m
+
     def _other_hand_farther(self, tr: _Track, point_m: np.ndarray, d_m: float) -> bool:
         """Whether the other hand of ``tr``'s person is tracked (normal or combined) and
         farther than ``d_m`` from ``point_m``."""
@@ -1358,27 +1368,77 @@ class MultiTargetTracker:
         ``reacquire_hand_speed_mps`` per second since the hand was last supported: a hand
         swung faster than its tracker can follow is lost a few frame sets later and far from
         where it was last supported. Lost trackers and seeds are matched jointly by least
-        total distance (Hungarian), so two targets lost together are not swapped greedily."""
+        total distance (Hungarian), so two targets lost together are not swapped greedily.
+
+        **Unsupported hands** (``reacquire_unsupported``): a person's labelled hand (normal)
+        whose tracker was unsupported in one of its last ``drift_window_frames`` frame sets
+        takes part as if it were lost, from where it was last supported before that miss
+        began (:meth:`_before_miss_m`, the gate growing from then), but only for a confirmed
+        seed within ``arm_reach_m`` of its own tracked head. A hand drawn back unseen, or
+        swung faster than its tracker follows, shows again where its tracker is not; its
+        tracker, coasting or slid onto something beside it, is lost ``lost_frames`` later or
+        as drifted. A seed confirmed on the hand before that started a new tracker there (an
+        identity switch; handshake with ``tops_from_heads``: p2's right hand at 10.07 s in
+        four seeds of six), or re-acquired the person's other hand, already lost (demo,
+        p2's left hand at 10.0 s: the right hand's tracker took it). The caller restarts
+        these trackers on their seeds (:meth:`_restart_unsupported`)."""
         lc = self.cfg.lifecycle
         lost = [tr for tr in self._tracks.values() if tr.phase is Phase.LOST]
-        if not lost or not seeds:
+        unsupported = [
+            tr
+            for tr in self._tracks.values()
+            if lc.reacquire_unsupported
+            and tr.phase is Phase.NORMAL
+            and tr.labelled
+            and tr.limb.is_hand
+            and tr.since_miss < lc.drift_window_frames
+            and self._active_head(tr.person) is not None
+        ]
+        rows_tr = lost + unsupported
+        if not rows_tr or not seeds:
             return {}
-        last = np.array([self._lost_prior_m(tr) for tr in lost])
+        last = np.array(
+            [self._lost_prior_m(tr) for tr in lost]
+            + [self._before_miss_m(tr) for tr in unsupported]
+        )
         sp = np.array([sd.position_m for sd in seeds])
         confirmed = np.array([sd.seen >= lc.init_confirm_frames for sd in seeds])
         d = np.linalg.norm(last[:, None] - sp[None], axis=2)
-        hands = np.array([tr.limb.is_hand and tr.person > 0 for tr in lost])
+        hands = np.array([tr.limb.is_hand and tr.person > 0 for tr in rows_tr])
         since = [
             tr.last_good_ns if hand else (tr.lost_since_ns or t_ns)
-            for tr, hand in zip(lost, hands, strict=True)
-        ]
+            for tr, hand in zip(lost, hands, strict=False)
+        ] + [tr.miss_from_ns for tr in unsupported]
         gate = self._reacquire_gate_m((t_ns - np.array(since)) * 1e-9, hands)
         ok = (d <= gate[:, None]) & (confirmed[None] | (d <= lc.reacquire_near_m))
+        if unsupported:
+            strong = np.array([sd.count >= lc.init_confirm_frames for sd in seeds])
+            reach = self.cfg.labelling.arm_reach_m
+            for i, tr in enumerate(unsupported, start=len(lost)):
+                head = self._active_head(tr.person)
+                ok[i] &= strong & (np.linalg.norm(sp - head.mean_m, axis=1) <= reach)
         if lc.reacquire_own_body:
-            ok &= ~self._claimed_by_others(lost, sp)
+            ok &= ~self._claimed_by_others(rows_tr, sp)
         cost = np.where(ok, d, 1e6)
         rows, cols = linear_sum_assignment(cost)
-        return {lost[r].id: int(c) for r, c in zip(rows, cols, strict=True) if cost[r, c] < 1e6}
+        return {rows_tr[r].id: int(c) for r, c in zip(rows, cols, strict=True) if cost[r, c] < 1e6}
+
+    def _restart_unsupported(
+        self, reacquired: dict[int, int], seeds: list[_Pending]
+    ) -> dict[int, int]:
+        """Draw the unsupported hands that :meth:`_reacquire` matched (the trackers in
+        ``reacquired`` that are not lost) again around their seeds; returns the lost ones'
+        matches."""
+        out = {}
+        for tid, i in reacquired.items():
+            tr = self._tracks[tid]
+            if tr.phase is Phase.LOST:
+                out[tid] = i
+                continue
+            self._reinit(tr, seeds[i].position_m, seeds[i].velocity_mps)
+            tr.misses = 0
+            log.debug("t%d re-acquired while unsupported at %s", tid, seeds[i].position_m.round(2))
+        return out
 
     def _claimed_by_others(self, lost: list[_Track], points_m: np.ndarray) -> np.ndarray:
         """(L, S) bool: seed s lies where another person's tracked head claims a hand, for

@@ -291,6 +291,15 @@ class LifecycleConfig:
         min=0.0,
     )
     reacquire_max_m: float = setting(1.0, "the re-acquisition gate never exceeds this, m", min=0.0)
+    reacquire_unsupported: bool = setting(
+        True,
+        "a person's labelled hand whose tracker was unsupported in one of its last "
+        "drift_window_frames frame sets is re-acquired like a lost one (matched together with "
+        "the lost trackers, from where it was last supported before that miss), by a "
+        "confirmed seed within its head's arm_reach_m: the hand shows again where its "
+        "tracker is not, and before it is lost a new tracker would start on it (an identity "
+        "switch) or a lost tracker take it",
+    )
     reacquire_with_body: bool = setting(
         True,
         "a lost hand of a person whose head is tracked is re-acquired around its last position "

@@ -1345,7 +1345,10 @@ def test_a_shirt_point_stacked_above_the_right_hand_gives_its_slot_to_the_left_h
     seen = [a["head"], a["right_hand"], shirt, b["head"], b["left_hand"], b["right_hand"]]
     sets = [_noisy_set(rng, seen, [0.95] * 6) for _ in range(40)]
     sets += [_noisy_set(rng, [*seen, held], [0.95] * 7) for _ in range(40)]
-    cfg = TrackingConfig(labelling=LabellingConfig(contest_side_m=side_m))
+    cfg = TrackingConfig(
+        lifecycle=LifecycleConfig(reacquire_unsupported=False),
+        labelling=LabellingConfig(contest_side_m=side_m),
+    )
     trk = MultiTargetTracker(cfg, rig, seed=17)
     out = [trk.step(i * DT_NS, c) for i, c in enumerate(sets)]
     assert _owner_of(out[39], shirt).startswith("p1/")
@@ -1364,7 +1367,8 @@ def test_a_lost_left_hand_gives_its_slot_to_a_tracker_on_the_left(rig, side_m):
     right elbow (a shaded shirt) has been unlabelled since it showed, after the hands. After
     yield_lost_s the lost left hand's slot goes to the tracker on the left, not to the
     older one on the right; with contest_side_m 0 the first unlabelled tracker in line, the
-    shirt's, takes it."""
+    shirt's, takes it. (The jump must lose the tracker: ``reacquire_unsupported`` off, else
+    the hand's seed re-acquires it before it is lost.)"""
     rng = np.random.default_rng(7)
     a, b = body((2.0, 2.0), 0.0), body((3.6, 2.0), 180.0)
     held = a["head"] + 0.2 * a["left"] + 0.25 * a["fwd"] - [0, 0, 0.6]
@@ -1378,7 +1382,10 @@ def test_a_lost_left_hand_gives_its_slot_to_a_tracker_on_the_left(rig, side_m):
     sets = [frame([*rest, held]) for _ in range(20)]
     sets += [frame([*rest, held, shirt]) for _ in range(20)]
     sets += [frame([*rest, reach, shirt]) for _ in range(30)]
-    cfg = TrackingConfig(labelling=LabellingConfig(contest_side_m=side_m))
+    cfg = TrackingConfig(
+        lifecycle=LifecycleConfig(reacquire_unsupported=False),
+        labelling=LabellingConfig(contest_side_m=side_m),
+    )
     trk = MultiTargetTracker(cfg, rig, seed=17)
     out = [trk.step(i * DT_NS, c) for i, c in enumerate(sets)]
     assert _owner_of(out[39], held) == "p1/left_hand"
@@ -1910,3 +1917,59 @@ def test_a_hand_dropped_fast_from_the_face_parts_from_the_head(rig, rng, covered
     assert hand.target_id == ids["p1/left_hand"] and head.target_id == ids["p1/head"]
     assert np.linalg.norm(hand.mean_m - p["left_hand"]) < 0.05
     assert np.linalg.norm(head.mean_m[:2] - p["head"][:2]) < 0.05  # (reported above its skin)
+
+
+@pytest.mark.parametrize("on", [True, False])
+def test_a_hand_seen_again_just_before_its_tracker_is_lost_keeps_its_tracker(rig, rng, on):
+    """A person's right hand, drawn back unseen from a handshake, shows again 40 cm from
+    where its tracker coasts: the tracker loses its support at once, and the hand's new
+    candidate is a confirmed seed in the very frame set that the tracker is lost (handshake
+    scene with ``tops_from_heads``, p2 at 10.07 s, four seeds of six). The hand's tracker,
+    unsupported, is matched with the seed as a lost one would be (``reacquire_unsupported``;
+    the seed is within its head's reach) and keeps its identity and label; with the rule
+    off a new tracker takes the hand."""
+    p = body((2.0, 2.0), 0.0)
+    out_there = p["right_hand"] + 0.4 * p["fwd"] + [0.0, 0.0, 0.2]
+    frames = [[p["head"], p["left_hand"], out_there] for _ in range(30)]
+    frames += [[p["head"], p["left_hand"], p["right_hand"]] for _ in range(20)]
+    cfg = TrackingConfig(
+        lifecycle=LifecycleConfig(retire_unclaimed_s=0.0, reacquire_unsupported=on)
+    )
+    out = run(MultiTargetTracker(cfg, rig, seed=2), frames, rng)
+    before = {s.label: s.target_id for s in out[29].targets}
+    assert set(before) == {"p1/head", "p1/left_hand", "p1/right_hand"}
+    near = min(out[-1].targets, key=lambda s: np.linalg.norm(s.mean_m - p["right_hand"]))
+    assert np.linalg.norm(near.mean_m - p["right_hand"]) < 0.05
+    if on:
+        assert near.target_id == before["p1/right_hand"] and near.label == "p1/right_hand"
+        assert not any(t.new is Phase.LOST for f in out[30:] for t in f.transitions)
+    else:
+        assert near.target_id != before["p1/right_hand"]
+
+
+@pytest.mark.parametrize("on", [True, False])
+def test_a_hand_that_outran_its_tracker_is_not_taken_by_its_lost_other_hand(rig, rng, on):
+    """The right hand is hidden and its tracker lost; then the left hand jumps 37 cm out
+    and up (swung faster than its tracker follows). Its seed confirms in the frame set its tracker
+    runs out of support, within the lost right hand's growing gate: the left hand's
+    tracker, unsupported but not yet lost, is matched together with the lost one and, being
+    nearer, takes it (demo with ``tops_from_heads``, p2 at 10.0 s, seeds 1-3). With
+    ``reacquire_unsupported`` off the lost right hand's tracker takes the left hand."""
+    p = body((2.0, 2.0), 0.0)
+    out_left = p["left_hand"] + 0.3 * p["fwd"] + 0.15 * p["left"] + [0.0, 0.0, 0.15]
+    frames = [[p["head"], p["left_hand"], p["right_hand"]] for _ in range(30)]
+    frames += [[p["head"], p["left_hand"]] for _ in range(4)]
+    frames += [[p["head"], out_left] for _ in range(10)]
+    frames += [[p["head"], out_left, p["right_hand"]] for _ in range(10)]
+    cfg = TrackingConfig(
+        lifecycle=LifecycleConfig(retire_unclaimed_s=0.0, reacquire_unsupported=on)
+    )
+    out = run(MultiTargetTracker(cfg, rig, seed=4), frames, rng)
+    before = {s.label: s.target_id for s in out[29].targets}
+    assert set(before) == {"p1/head", "p1/left_hand", "p1/right_hand"}
+    on_left = min(out[-1].targets, key=lambda s: np.linalg.norm(s.mean_m - out_left))
+    assert np.linalg.norm(on_left.mean_m - out_left) < 0.05
+    if on:
+        assert on_left.target_id == before["p1/left_hand"] and on_left.label == "p1/left_hand"
+    else:
+        assert on_left.target_id == before["p1/right_hand"]
