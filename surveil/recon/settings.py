@@ -25,7 +25,7 @@ class CandidateConfig:
         "by another person, in a late camera); not in the paper (docs/candidates.md)",
     )
     tops_from_heads: bool = setting(
-        False,
+        True,
         "p_o takes the top of a silhouette that holds two or more tracked heads from the "
         "crown of the head nearest to Z (the tracker's feedback) instead of the silhouette's "
         "top row, which there is the tallest person's (docs/candidates.md)",

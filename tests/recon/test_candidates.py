@@ -476,8 +476,9 @@ def test_a_hand_in_a_silhouette_merged_with_a_taller_person_takes_its_own_heads_
     """cam1 sees a 1.6 m person's hand in one silhouette with a 1.95 m person farther away
     behind him: the silhouette's top row is the farther head's, the hand sits much lower in
     it than in cam0, where the short person stands alone, and p_o rejects the pair. With the
-    tracked heads' crowns (tops_from_heads) the top is the crown of the head nearest to the
-    hand, and the pair is kept; with one crown in the silhouette nothing changes."""
+    tracked heads' crowns (tops_from_heads, the default) the top is the crown of the head
+    nearest to the hand, and the pair is kept; with no crowns, or one in the silhouette,
+    nothing changes."""
     rig = _rig(2)
     short, tall = np.array([3.0, 2.0, 1.6]), np.array([1.0, 3.4, 1.95])
     hand = np.array([[3.0, 2.05, 1.1]])
@@ -486,8 +487,10 @@ def test_a_hand_in_a_silhouette_merged_with_a_taller_person_takes_its_own_heads_
         _people(rig.cameras[1], np.array([short, tall]), hand),
     ]
     on = dataclasses.replace(CFG, tops_from_heads=True)
+    off = dataclasses.replace(CFG, tops_from_heads=False)
     crowns = np.array([short, tall])
-    assert len(make_candidates(obs, rig, CFG, crowns_m=crowns).points_m) == 0
+    assert len(make_candidates(obs, rig, off, crowns_m=crowns).points_m) == 0
+    assert len(make_candidates(obs, rig, on).points_m) == 0  # no tracked heads yet
     assert len(make_candidates(obs, rig, on, crowns_m=crowns[:1]).points_m) == 0
     cs = make_candidates(obs, rig, on, crowns_m=crowns)
     np.testing.assert_allclose(cs.points_m, hand, atol=1e-6)
