@@ -1378,8 +1378,8 @@ class MultiTargetTracker:
         swung faster than its tracker follows, shows again where its tracker is not; its
         tracker, coasting or slid onto something beside it, is lost ``lost_frames`` later or
         as drifted. A seed confirmed on the hand before that started a new tracker there (an
-        identity switch; handshake with ``tops_from_heads``: p2's right hand at 10.07 s in
-        four seeds of six), or re-acquired the person's other hand, already lost (demo,
+        identity switch; handshake, p2's right hand at 10.07 s in four seeds of six, with
+        ``tops_from_heads`` on), or re-acquired the person's other hand, already lost (demo,
         p2's left hand at 10.0 s: the right hand's tracker took it). The caller restarts
         these trackers on their seeds (:meth:`_restart_unsupported`)."""
         lc = self.cfg.lifecycle
@@ -1407,7 +1407,7 @@ class MultiTargetTracker:
         hands = np.array([tr.limb.is_hand and tr.person > 0 for tr in rows_tr])
         since = [
             tr.last_good_ns if hand else (tr.lost_since_ns or t_ns)
-            for tr, hand in zip(lost, hands, strict=False)
+            for tr, hand in zip(lost, hands[: len(lost)], strict=True)
         ] + [tr.miss_from_ns for tr in unsupported]
         gate = self._reacquire_gate_m((t_ns - np.array(since)) * 1e-9, hands)
         ok = (d <= gate[:, None]) & (confirmed[None] | (d <= lc.reacquire_near_m))
