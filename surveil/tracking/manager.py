@@ -897,13 +897,19 @@ class MultiTargetTracker:
         return out
 
     @staticmethod
-    def _before_miss_m(tr: _Track) -> np.ndarray:
+    def _history_at(tr: _Track, t_ns: int) -> np.ndarray | None:
+        """A copy of ``tr``'s estimate at ``t_ns``: the latest one at or before it that its
+        history holds, or None if the history starts later."""
+        for t, m in reversed(tr.history):
+            if t <= t_ns:
+                return m.copy()
+        return None
+
+    def _before_miss_m(self, tr: _Track) -> np.ndarray:
         """Where ``tr`` stood when it was last supported before its latest miss began (a
         tracker that slid onto something is supported again there)."""
-        for t, m in reversed(tr.history):
-            if t <= tr.miss_from_ns:
-                return m
-        return tr.last_good_m
+        m = self._history_at(tr, tr.miss_from_ns)
+        return tr.last_good_m.copy() if m is None else m
 
     def _other_hand_farther(self, tr: _Track, point_m: np.ndarray, d_m: float) -> bool:
         """Whether the other hand of ``tr``'s person is tracked (normal or combined) and
@@ -1384,16 +1390,20 @@ class MultiTargetTracker:
         these trackers on their seeds (:meth:`_restart_unsupported`)."""
         lc = self.cfg.lifecycle
         lost = [tr for tr in self._tracks.values() if tr.phase is Phase.LOST]
-        unsupported = [
-            tr
-            for tr in self._tracks.values()
-            if lc.reacquire_unsupported
-            and tr.phase is Phase.NORMAL
-            and tr.labelled
-            and tr.limb.is_hand
-            and tr.since_miss < lc.drift_window_frames
-            and self._active_head(tr.person) is not None
-        ]
+        unsupported, their_heads = [], []
+        if lc.reacquire_unsupported:
+            for tr in self._tracks.values():
+                if not (
+                    tr.phase is Phase.NORMAL
+                    and tr.labelled
+                    and tr.limb.is_hand
+                    and tr.since_miss < lc.drift_window_frames
+                ):
+                    continue
+                head = self._active_head(tr.person)
+                if head is not None:
+                    unsupported.append(tr)
+                    their_heads.append(head.mean_m)
         rows_tr = lost + unsupported
         if not rows_tr or not seeds:
             return {}
@@ -1413,10 +1423,8 @@ class MultiTargetTracker:
         ok = (d <= gate[:, None]) & (confirmed[None] | (d <= lc.reacquire_near_m))
         if unsupported:
             strong = np.array([sd.count >= lc.init_confirm_frames for sd in seeds])
-            reach = self.cfg.labelling.arm_reach_m
-            for i, tr in enumerate(unsupported, start=len(lost)):
-                head = self._active_head(tr.person)
-                ok[i] &= strong & (np.linalg.norm(sp - head.mean_m, axis=1) <= reach)
+            to_head = np.linalg.norm(sp[None] - np.array(their_heads)[:, None], axis=2)
+            ok[len(lost) :] &= strong[None] & (to_head <= self.cfg.labelling.arm_reach_m)
         if lc.reacquire_own_body:
             ok &= ~self._claimed_by_others(rows_tr, sp)
         cost = np.where(ok, d, 1e6)
@@ -1487,10 +1495,8 @@ class MultiTargetTracker:
         head = self._head_track(person)
         if head is None:
             return None
-        for ht, hm in reversed(head.history):
-            if ht <= t_ns:
-                return hm.copy()
-        return head.mean_m.copy()
+        m = self._history_at(head, t_ns)
+        return head.mean_m.copy() if m is None else m
 
     def _reacquire_gate_m(
         self, unseen_s: float | np.ndarray, hand: bool | np.ndarray = False
