@@ -11,6 +11,7 @@ from surveil.datatypes import CameraObservation, FrameSet
 from surveil.io.recording import Recording
 from surveil.io.skin_model import load_camera_skin_models
 from surveil.pipeline import PipelineConfig, silhouette_distance_cap_px
+from surveil.recon.crowns import silhouette_crowns
 
 
 def observe_recording(
@@ -22,7 +23,7 @@ def observe_recording(
     skin_near_people: bool = False,
 ) -> Iterator[tuple[FrameSet, dict[str, CameraObservation], dict[str, list[float]]]]:
     """Per frame set: the frames, every camera's observation (by camera name) and the seconds
-    each camera spent in ``background``, ``skin`` and ``blobs``.
+    each camera spent in ``background``, ``skin``, ``blobs`` and ``crowns``.
 
     Background models start on the run's clock as in ``surveil run``
     (:func:`learning_frames_after`); blobs are chosen for ``n_people`` (default: the number
@@ -40,7 +41,7 @@ def observe_recording(
     scenery = {cam: SceneryMask(model) for cam, model in skin_models.items()}
     for fs in rec.framesets(stop=max_frames):
         observations: dict[str, CameraObservation] = {}
-        times: dict[str, list[float]] = {"background": [], "skin": [], "blobs": []}
+        times: dict[str, list[float]] = {"background": [], "skin": [], "blobs": [], "crowns": []}
         for cam in rec.camera_names:
             img = fs.images.get(cam)
             if img is None:
@@ -66,8 +67,14 @@ def observe_recording(
             on_scenery = scenery[cam].mask(models[cam]) if cfg.blobs.scenery_share > 0 else None
             blobs = extract_blobs(skin, sil, cfg.blobs, n_people, img, on_scenery)
             t3 = time.perf_counter()
+            crowns_cfg = cfg.candidates.crowns
+            crowns = (
+                silhouette_crowns(sil, rec.rig[cam], crowns_cfg) if crowns_cfg.enabled else None
+            )
+            t4 = time.perf_counter()
             times["background"].append(t1 - t0)
             times["skin"].append(t2 - t1)
             times["blobs"].append(t3 - t2)
-            observations[cam] = CameraObservation(cam, sil, skin, blobs)
+            times["crowns"].append(t4 - t3)
+            observations[cam] = CameraObservation(cam, sil, skin, blobs, crowns)
         yield fs, observations, times

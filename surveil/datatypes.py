@@ -450,12 +450,23 @@ class BlobSet:
 
 @dataclass(frozen=True, slots=True)
 class CameraObservation:
-    """Everything the per-camera stage found in one frame: silhouettes, skin, blobs."""
+    """Everything the per-camera stage found in one frame: silhouettes, skin, blobs, and the
+    silhouettes' crowns.
+
+    crowns_px : (C, 2) float64 or None -- (u, v) of the crowns (heads' tops) on the
+        silhouettes' top edges (:func:`surveil.recon.crowns.silhouette_crowns`); None when not
+        looked for (the candidate stage then finds them itself)
+    """
 
     camera: str
     silhouettes: Silhouettes
     skin: np.ndarray  # (H, W) bool skin pixels (whole frame, before the silhouette mask)
     blobs: BlobSet
+    crowns_px: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.crowns_px is not None:
+            require_shape("crowns_px", self.crowns_px, (None, 2), np.floating)
 
 
 @dataclass(frozen=True, slots=True)

@@ -45,6 +45,7 @@ from surveil.datatypes import (
 )
 from surveil.io.recording import Recording
 from surveil.recon.candidates import make_candidates
+from surveil.recon.crowns import silhouette_crowns
 from surveil.recon.settings import CandidateConfig
 from surveil.tracking import MultiTargetTracker, TrackingConfig
 
@@ -254,15 +255,23 @@ class Pipeline:
             scenery = self.scenery[cam].mask(bg) if self.cfg.blobs.scenery_share > 0 else None
             blobs = extract_blobs(skin, silhouettes, self.cfg.blobs, n_people, img, scenery)
             t3 = time.perf_counter()
+            crowns_cfg = self.cfg.candidates.crowns
+            crowns = (
+                silhouette_crowns(silhouettes, self.rig[cam], crowns_cfg)
+                if crowns_cfg.enabled
+                else None
+            )
+            t4 = time.perf_counter()
             timings["background"] += 1000 * (t1 - t0)
             timings["skin"] += 1000 * (t2 - t1)
             timings["blobs"] += 1000 * (t3 - t2)
-            observations[cam] = CameraObservation(cam, silhouettes, skin, blobs)
+            timings["crowns"] += 1000 * (t4 - t3)
+            observations[cam] = CameraObservation(cam, silhouettes, skin, blobs, crowns)
         return observations
 
     def step(self, fs: FrameSet) -> FrameResult:
         """Process one frame set through every stage."""
-        timings = dict.fromkeys(("background", "skin", "blobs"), 0.0)
+        timings = dict.fromkeys(("background", "skin", "blobs", "crowns"), 0.0)
         observations = self._observe(fs, timings)
         self._n_framesets += 1
         learning = any(bg.learning for bg in self.backgrounds.values())

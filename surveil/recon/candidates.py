@@ -15,7 +15,8 @@ import numpy as np
 
 from surveil.camera import Rig
 from surveil.datatypes import BlobSet, CameraObservation, CandidateSet
-from surveil.recon.settings import CandidateConfig
+from surveil.recon.crowns import crown_heads, silhouette_crowns
+from surveil.recon.settings import CandidateConfig, CrownConfig
 from surveil.recon.triangulate import closest_points
 
 log = logging.getLogger(__name__)
@@ -359,7 +360,10 @@ def make_candidates(
     expected_m: np.ndarray | None = None,
     crowns_m: np.ndarray | None = None,
 ) -> CandidateSet:
-    """3-D candidate points of one frame set with their priors p(Z).
+    """3-D candidate points of one frame set with their priors p(Z): the skin blobs' pairs
+    (paper 004) and, with ``cfg.crowns.enabled``, the silhouettes' crowns where a head has no
+    skin candidate (:func:`surveil.recon.crowns.crown_heads`; their ``cam_pairs`` and
+    ``blob_pairs`` rows are -1, strongest-first order is kept within each kind).
 
     Parameters
     ----------
@@ -418,7 +422,56 @@ def make_candidates(
         if m in by_cam:
             raise ValueError(f"observations[{i}]: camera {obs.camera!r} appears twice")
         by_cam[m] = obs
+    skin = _skin_candidates(by_cam, rig, cfg, expected_m, crowns_m)
+    if not cfg.crowns.enabled:
+        return skin
+    return with_crowns(skin, by_cam, rig, cfg.crowns)
 
+
+def with_crowns(
+    skin: CandidateSet, by_cam: Mapping[int, CameraObservation], rig: Rig, cfg: CrownConfig
+) -> CandidateSet:
+    """``skin`` and after it the crowns' heads (:func:`crown_heads`) farther than
+    ``cfg.skin_clear_m`` from every skin candidate, with prior ``cfg.prior``. Each view's
+    crowns are its observation's (``crowns_px``), or found here when it has none."""
+    crowns = {
+        m: silhouette_crowns(o.silhouettes, rig.cameras[m], cfg)
+        if o.crowns_px is None
+        else o.crowns_px
+        for m, o in by_cam.items()
+    }
+    points, half_gap, _ = crown_heads(
+        {m: o.silhouettes for m, o in by_cam.items()}, crowns, rig, cfg
+    )
+    if len(skin.points_m) and len(points):
+        d = np.linalg.norm(points[:, None] - skin.points_m[None], axis=2).min(axis=1)
+        points, half_gap = points[d > cfg.skin_clear_m], half_gap[d > cfg.skin_clear_m]
+    if len(points) == 0:
+        return skin
+    n, k = len(skin.points_m), len(points)
+
+    def column(values: np.ndarray | None, missing: float | bool, crowns: np.ndarray) -> np.ndarray:
+        base = np.full((n, *crowns.shape[1:]), missing, crowns.dtype) if values is None else values
+        return np.concatenate([base, crowns])
+
+    return CandidateSet(
+        np.concatenate([skin.points_m, points]),
+        np.concatenate([skin.prior, np.full(k, cfg.prior)]),
+        half_gap_m=column(skin.half_gap_m, np.nan, half_gap),
+        cam_pairs=column(skin.cam_pairs, -1, np.full((k, 2), -1, np.int64)),
+        blob_pairs=column(skin.blob_pairs, -1, np.full((k, 2), -1, np.int64)),
+        rescued=column(skin.rescued, False, np.zeros(k, bool)),
+    )
+
+
+def _skin_candidates(
+    by_cam: dict[int, CameraObservation],
+    rig: Rig,
+    cfg: CandidateConfig,
+    expected_m: np.ndarray | None,
+    crowns_m: np.ndarray | None,
+) -> CandidateSet:
+    """:func:`make_candidates`' blob pairs (paper 004)."""
     # one back-projection per camera for all its blobs
     seen = sorted(m for m, obs in by_cam.items() if len(obs.blobs) > 0)
     if len(seen) < 2:

@@ -12,6 +12,92 @@ from surveil.config import setting
 
 
 @dataclass(frozen=True, slots=True)
+class CrownConfig:
+    """Head candidates from the silhouettes' crowns (``[candidates.crowns]``)."""
+
+    enabled: bool = setting(
+        True,
+        "add a head candidate where at least min_views views' silhouette crowns meet and no "
+        "skin candidate lies within skin_clear_m (docs/candidates.md, 'Crowns')",
+    )
+    crown_height_m: float = setting(
+        1.75,
+        "a crown's assumed height above the floor, m: a peak's line of sight meets it at the "
+        "depth that turns the peak's size from pixels to metres",
+        min=0.1,
+    )
+    min_rise_m: float = setting(
+        0.05,
+        "a crown rises at least this above the silhouette's top edge on either side (its "
+        "prominence: the higher of the lowest points between it and the next higher point of "
+        "the edge to the left and to the right), m",
+        min=0.0,
+    )
+    width_depth_m: float = setting(
+        0.06, "a crown's width is measured this far below its top, m", min=0.0
+    )
+    min_width_m: float = setting(0.06, "... and lies between this and max_width_m, m", min=0.0)
+    max_width_m: float = setting(
+        0.3, "... (a head is about 0.15 m wide; a raised fist narrower; shoulders wider), m"
+    )
+    top_to_centre_m: float = setting(
+        0.125,
+        "a head's centre lies this far below its crown (with hair), m; the lines of sight are "
+        "moved down by the head's extent across them, this vertically",
+        min=0.0,
+    )
+    half_width_m: float = setting(
+        0.09, "... and this horizontally (a line of sight looking straight down), m", min=0.0
+    )
+    max_gap_m: float = setting(
+        0.05,
+        "two moved lines of sight make a point when their half gap is at most this, m",
+        min=0.0,
+    )
+    min_z_m: float = setting(1.0, "a head's centre lies at least this high, m", min=0.0)
+    max_z_m: float = setting(2.1, "... and at most this high, m", min=0.0)
+    outside_px: float = setting(
+        3.0,
+        "a view sees a point outside the silhouettes when its projection is at least this far "
+        "from every silhouette pixel, px",
+        min=0.0,
+    )
+    max_outside_views: int = setting(
+        1,
+        "a point is dropped when more views than this see it outside the silhouettes (one "
+        "view may miss a head camouflaged against the wall behind it)",
+        min=0,
+    )
+    merge_radius_m: float = setting(
+        0.1, "points closer than this to the strongest pair's are one head, m", min=0.0
+    )
+    min_views: int = setting(3, "a head's points must come from at least this many views", min=2)
+    skin_clear_m: float = setting(
+        0.25,
+        "a crown candidate is added only where no skin candidate lies within this, m: a "
+        "head's skin candidate (face, neck) lies 4-15 cm from its centre, and the tracker "
+        "measures the rise from it (docs/tracking.md, 'Head centre')",
+        min=0.0,
+    )
+    prior: float = setting(
+        0.6,
+        "the prior p(Z) of a crown candidate, unitless (the skin candidates' p_o and p_b do "
+        "not apply: its lines of sight pass over the head)",
+        min=0.0,
+        max=1.0,
+    )
+
+    def __post_init__(self) -> None:
+        if self.min_width_m > self.max_width_m:
+            raise ValueError(
+                f"min_width_m ({self.min_width_m}) must not exceed max_width_m "
+                f"({self.max_width_m})"
+            )
+        if self.min_z_m > self.max_z_m:
+            raise ValueError(f"min_z_m ({self.min_z_m}) must not exceed max_z_m ({self.max_z_m})")
+
+
+@dataclass(frozen=True, slots=True)
 class CandidateConfig:
     """Widths, thresholds and merging of the candidate prior p(Z) = p_o * p_t * p_b."""
 
@@ -102,4 +188,8 @@ class CandidateConfig:
         8.0,
         "a blob whose centroid is within this of a candidate's projection supports it, px",
         min=0.0,
+    )
+    crowns: CrownConfig = setting(
+        default_factory=CrownConfig,
+        doc="head candidates from the silhouettes' crowns (docs/candidates.md, 'Crowns')",
     )
