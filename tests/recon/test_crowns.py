@@ -16,6 +16,7 @@ from surveil.errors import ConfigError
 from surveil.recon.candidates import make_candidates
 from surveil.recon.crowns import centre_lines, crown_heads, silhouette_crowns
 from surveil.recon.settings import CandidateConfig, CrownConfig
+from surveil.rigs import make_corner_rig
 
 W, H = 640, 480
 CFG = CrownConfig()
@@ -23,20 +24,7 @@ HEAD_A, HEAD_B = 0.125, 0.09  # the head's vertical and horizontal semi-axes, m
 
 
 def _rig() -> Rig:
-    corners = [(0.0, 0.0), (6.0, 0.0), (6.0, 4.0), (0.0, 4.0)]
-    return Rig(
-        tuple(
-            look_at(
-                f"cam{i}",
-                np.array([x, y, 2.8]),
-                np.array([3.0, 2.0, 1.0]),
-                width=W,
-                height=H,
-                hfov_deg=80,
-            )
-            for i, (x, y) in enumerate(corners)
-        )
-    )
+    return make_corner_rig(4, room_m=(6.0, 4.0), height_m=2.8, size=(W, H), hfov_deg=80)
 
 
 def _parts(head_m: np.ndarray) -> list[np.ndarray]:
