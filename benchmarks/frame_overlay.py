@@ -9,8 +9,9 @@ the frame set nearest ``--at`` and writes a 2x2 (or larger) grid of its camera f
 - skin pixels tinted magenta (the whole frame: the classifier's verdict before the
   silhouette mask), silhouette outlines in green;
 - every blob's box and point in yellow, numbered as in ``BlobSet`` (largest first);
+- the silhouettes' crowns (``CameraObservation.crowns_px``) as blue triangles;
 - the frame set's candidates (after explaining away, without tracker feedback) as red
-  crosses;
+  crosses (heads from the crowns among them: docs/candidates.md, "Crowns");
 - the true heads and hands (ground truth, when the recording has one) as cyan rings,
   labelled; ``--limb`` restricts them;
 - any ``--point X,Y,Z`` (world, metres: a tracker's estimate read from an MCAP, say) as a
@@ -71,6 +72,10 @@ def draw_camera(img, obs, cam, candidates_m, truth, points_m) -> np.ndarray:
         u, v = (int(round(c)) for c in blobs.centroids_px[k])
         cv2.drawMarker(vis, (u, v), (0, 255, 255), cv2.MARKER_CROSS, 7)
         cv2.putText(vis, str(k), (x + w + 1, y + 8), 0, 0.35, (0, 255, 255), 1)
+    for u, v in obs.crowns_px if obs.crowns_px is not None else ():
+        cv2.drawMarker(
+            vis, (int(round(u)), int(round(v))), (255, 128, 0), cv2.MARKER_TRIANGLE_UP, 9
+        )
 
     def pixel(p_m) -> tuple[int, int] | None:
         uv, depth = cam.project(np.asarray(p_m)[None])
@@ -183,6 +188,8 @@ def main(argv: list[str] | None = None) -> int:
             f"c{c} b{b}: {owners.get((int(c), int(b)), '?')}"
             for c, b in zip(cands.cam_pairs[k], cands.blob_pairs[k], strict=True)
         )
+        if (cands.cam_pairs[k] < 0).all():
+            pair = "the silhouettes' crowns"
         print(
             f"| {np.round(p, 2).tolist()} | {cands.prior[k]:.2f} | {near} | {pair} "
             f"| {support[k].tolist()} |"
