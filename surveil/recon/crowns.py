@@ -47,7 +47,7 @@ TOP_SHARE = 0.6
 
 
 def _px_per_m(
-    camera: Camera, origin_z: float, uv_px: np.ndarray, height_m: float, fallback: np.ndarray
+    camera: Camera, uv_px: np.ndarray, height_m: float, fallback: np.ndarray
 ) -> np.ndarray:
     """(N,) pixels per metre at the depth where each pixel's line of sight reaches
     ``height_m``; ``fallback`` where it never does (looking up or level). A scale, not a
@@ -55,12 +55,12 @@ def _px_per_m(
     K = camera.K
     y = (uv_px[:, 1] - K[1, 2]) / K[1, 1]
     x = (uv_px[:, 0] - K[0, 2] - K[0, 1] * y) / K[0, 0]
-    rays = np.column_stack([x, y, np.ones(len(uv_px))]) @ camera.R  # unit z in the camera
+    # world directions with unit depth: the parameter reaching height_m is the depth
+    rays = np.column_stack([x, y, np.ones(len(uv_px))]) @ camera.R
     down = rays[:, 2]
-    safe = np.where(np.abs(down) > 1e-9, down, 1.0)
-    t = np.where(np.abs(down) > 1e-9, (height_m - origin_z) / safe, -1.0)
-    depth = t  # the rays have unit z in the camera frame
-    return np.where((t > 0) & (depth > 0.3), camera.K[0, 0] / np.maximum(depth, 0.3), fallback)
+    level = np.abs(down) <= 1e-9
+    depth = np.where(level, -1.0, (height_m - camera.centre_m[2]) / np.where(level, 1.0, down))
+    return np.where(depth > 0.3, K[0, 0] / np.maximum(depth, 0.3), fallback)
 
 
 def silhouette_crowns(silhouettes: Silhouettes, camera: Camera, cfg: CrownConfig) -> np.ndarray:
@@ -68,7 +68,7 @@ def silhouette_crowns(silhouettes: Silhouettes, camera: Camera, cfg: CrownConfig
     crown's row (half a pixel above its centre).
 
     A crown is a local peak of a silhouette's top edge (its first row in each column) that
-    rises ``cfg.min_rise_m`` above the edge's lower side within ``cfg.window_m`` and is
+    rises ``cfg.min_rise_m`` above the edge on either side (its prominence) and is
     ``cfg.min_width_m``..``cfg.max_width_m`` wide ``cfg.width_depth_m`` below its top, in
     metres at the depth where its line of sight meets ``cfg.crown_height_m`` (elsewhere, at
     the silhouette's height taken as an adult's). Peaks on the image's top row are not crowns
@@ -121,7 +121,6 @@ def silhouette_crowns(silhouettes: Silhouettes, camera: Camera, cfg: CrownConfig
         return np.zeros((0, 2))
     scale = _px_per_m(
         camera,
-        float(camera.centre_m[2]),
         np.column_stack([column[peaks], -edge[peaks]]),
         cfg.crown_height_m,
         np.concatenate(fallback)[peaks - 1],

@@ -81,8 +81,8 @@ class CrownConfig:
     )
     prior: float = setting(
         0.6,
-        "the prior p(Z) of a crown candidate, unitless (the skin candidates' p_o and p_b do "
-        "not apply: its lines of sight pass over the head)",
+        "the prior p(Z) of a crown candidate, unitless: a fixed value, as the skin pairs' p_o "
+        "and p_t do not apply to lines of sight that pass over the head",
         min=0.0,
         max=1.0,
     )
