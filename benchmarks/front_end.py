@@ -1,17 +1,16 @@
-"""The per-camera stage of a run (background, skin, blobs) as the benchmarks replay it."""
+"""The per-camera stage of a run (``surveil.pipeline.observe_camera``: background, skin,
+blobs, crowns) as the benchmarks replay it."""
 
 from __future__ import annotations
 
-import time
 from collections.abc import Iterator
 
-from surveil.blobs.background import BackgroundModel, learning_frames_after, shadow_region
-from surveil.blobs.extract import SceneryMask, blob_margin_px, extract_blobs
+from surveil.blobs.background import BackgroundModel
+from surveil.blobs.extract import SceneryMask
 from surveil.datatypes import CameraObservation, FrameSet
 from surveil.io.recording import Recording
 from surveil.io.skin_model import load_camera_skin_models
-from surveil.pipeline import PipelineConfig, silhouette_distance_cap_px
-from surveil.recon.crowns import silhouette_crowns
+from surveil.pipeline import CAMERA_STEPS, PipelineConfig, new_background, observe_camera
 
 
 def observe_recording(
@@ -41,40 +40,24 @@ def observe_recording(
     scenery = {cam: SceneryMask(model) for cam, model in skin_models.items()}
     for fs in rec.framesets(stop=max_frames):
         observations: dict[str, CameraObservation] = {}
-        times: dict[str, list[float]] = {"background": [], "skin": [], "blobs": [], "crowns": []}
+        times: dict[str, list[float]] = {step: [] for step in CAMERA_STEPS}
         for cam in rec.camera_names:
             img = fs.images.get(cam)
             if img is None:
                 continue
             if cam not in models:
-                models[cam] = BackgroundModel(
-                    cfg.background,
-                    img.shape[:2],
-                    learning_frames_after(cfg.background, fs.index),
-                    silhouette_distance_cap_px(cfg),
-                    shadow_region(cfg.background, rec.rig, cam, img.shape[:2]),
-                )
-            t0 = time.perf_counter()
-            requests = cfg.background_requests()
-            requests["changed"] |= changed
-            sil = models[cam].step(img, **requests)
-            t1 = time.perf_counter()
-            boxes = (
-                sil.boxes(blob_margin_px(cfg.blobs, img.shape[1])) if skin_near_people else None
+                models[cam] = new_background(cfg, rec.rig, cam, img.shape[:2], fs.index)
+            observations[cam], seconds = observe_camera(
+                cfg,
+                rec.rig[cam],
+                img,
+                models[cam],
+                skin_models[cam],
+                scenery[cam],
+                n_people,
+                changed=changed,
+                skin_everywhere=not skin_near_people,
             )
-            skin = skin_models[cam].classify(img, boxes)
-            t2 = time.perf_counter()
-            on_scenery = scenery[cam].mask(models[cam]) if cfg.blobs.scenery_share > 0 else None
-            blobs = extract_blobs(skin, sil, cfg.blobs, n_people, img, on_scenery)
-            t3 = time.perf_counter()
-            crowns_cfg = cfg.candidates.crowns
-            crowns = (
-                silhouette_crowns(sil, rec.rig[cam], crowns_cfg) if crowns_cfg.enabled else None
-            )
-            t4 = time.perf_counter()
-            times["background"].append(t1 - t0)
-            times["skin"].append(t2 - t1)
-            times["blobs"].append(t3 - t2)
-            times["crowns"].append(t4 - t3)
-            observations[cam] = CameraObservation(cam, sil, skin, blobs, crowns)
+            for step, sec in seconds.items():
+                times[step].append(sec)
         yield fs, observations, times

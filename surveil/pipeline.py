@@ -30,7 +30,7 @@ from surveil.blobs.background import BackgroundModel, learning_frames_after, sha
 from surveil.blobs.extract import SceneryMask, blob_margin_px, extract_blobs
 from surveil.blobs.settings import BackgroundConfig, BlobConfig
 from surveil.blobs.skin import SkinModel, default_skin_model
-from surveil.camera import Rig
+from surveil.camera import Camera, Rig
 from surveil.carry import CarryAnalyser, CarryConfig
 from surveil.config import from_table, read_toml, setting
 from surveil.datatypes import (
@@ -145,6 +145,66 @@ class Sink(Protocol):
     def close(self) -> None: ...
 
 
+CAMERA_STEPS = ("background", "skin", "blobs", "crowns")
+
+
+def new_background(
+    cfg: PipelineConfig, rig: Rig, cam: str, shape: tuple[int, int], frame_index: int
+) -> BackgroundModel:
+    """Camera ``cam``'s background model as a run starts it at frame set ``frame_index``
+    (its learning phase on the run's clock, :func:`learning_frames_after`)."""
+    return BackgroundModel(
+        cfg.background,
+        shape,
+        learning_frames_after(cfg.background, frame_index),
+        silhouette_distance_cap_px(cfg),
+        shadow_region(cfg.background, rig, cam, shape),
+    )
+
+
+def observe_camera(
+    cfg: PipelineConfig,
+    camera: Camera,
+    img: np.ndarray,
+    background: BackgroundModel,
+    skin_model: SkinModel,
+    scenery: SceneryMask,
+    n_people: int | None,
+    *,
+    at_least_people: int = 1,
+    people_px: np.ndarray | None = None,
+    changed: bool = False,
+    skin_everywhere: bool = False,
+) -> tuple[CameraObservation, dict[str, float]]:
+    """One camera's frame through the per-camera stage (sections 6.1-6.2 and the crowns):
+    its observation and the seconds spent in each of ``CAMERA_STEPS``.
+
+    ``n_people``: the number of people the blobs are chosen for (None: as many as the
+    silhouettes, at least ``at_least_people``, a run's tracked heads). ``people_px``: where
+    tracked people project (the background does not learn them). ``changed``: the
+    silhouettes carry MOG2's changed mask even when ``cfg`` does not ask for it.
+    ``skin_everywhere``: classify skin in the whole frame, not only in the boxes around the
+    silhouettes as a run does (for diagnostics that look at skin far from people).
+    """
+    requests = cfg.background_requests()
+    requests["changed"] |= changed
+    t0 = time.perf_counter()
+    silhouettes = background.step(img, **requests, people_px=people_px)
+    t1 = time.perf_counter()
+    boxes = None if skin_everywhere else silhouettes.boxes(blob_margin_px(cfg.blobs, img.shape[1]))
+    skin = skin_model.classify(img, boxes)
+    t2 = time.perf_counter()
+    people = n_people or max(silhouettes.n, at_least_people)
+    on_scenery = scenery.mask(background) if cfg.blobs.scenery_share > 0 else None
+    blobs = extract_blobs(skin, silhouettes, cfg.blobs, people, img, on_scenery)
+    t3 = time.perf_counter()
+    crowns_cfg = cfg.candidates.crowns
+    crowns = silhouette_crowns(silhouettes, camera, crowns_cfg) if crowns_cfg.enabled else None
+    t4 = time.perf_counter()
+    seconds = dict(zip(CAMERA_STEPS, (t1 - t0, t2 - t1, t3 - t2, t4 - t3), strict=True))
+    return CameraObservation(camera.name, silhouettes, skin, blobs, crowns), seconds
+
+
 class Pipeline:
     """One run over synchronised frame sets of a rig.
 
@@ -227,51 +287,34 @@ class Pipeline:
 
     def _observe(self, fs: FrameSet, timings: dict[str, float]) -> dict[str, CameraObservation]:
         observations = {}
+        n_people = self.cfg.people_hint or None
         for cam in self.rig.names:
             img = fs.images.get(cam)
             if img is None:
                 continue
             bg = self.backgrounds.get(cam)
             if bg is None:
-                bg = self.backgrounds[cam] = BackgroundModel(
-                    self.cfg.background,
-                    img.shape[:2],
-                    learning_frames_after(self.cfg.background, self._n_framesets),
-                    silhouette_distance_cap_px(self.cfg),
-                    shadow_region(self.cfg.background, self.rig, cam, img.shape[:2]),
+                bg = self.backgrounds[cam] = new_background(
+                    self.cfg, self.rig, cam, img.shape[:2], self._n_framesets
                 )
-            t0 = time.perf_counter()
-            silhouettes = bg.step(
+            observations[cam], seconds = observe_camera(
+                self.cfg,
+                self.rig[cam],
                 img,
-                **self.cfg.background_requests(),
+                bg,
+                self.skin_models[cam],
+                self.scenery[cam],
+                n_people,
+                at_least_people=max(self._n_heads, 1),
                 people_px=self._people_px(cam),
             )
-            t1 = time.perf_counter()
-            skin = self.skin_models[cam].classify(
-                img, silhouettes.boxes(blob_margin_px(self.cfg.blobs, img.shape[1]))
-            )
-            t2 = time.perf_counter()
-            n_people = self.cfg.people_hint or max(silhouettes.n, self._n_heads, 1)
-            scenery = self.scenery[cam].mask(bg) if self.cfg.blobs.scenery_share > 0 else None
-            blobs = extract_blobs(skin, silhouettes, self.cfg.blobs, n_people, img, scenery)
-            t3 = time.perf_counter()
-            crowns_cfg = self.cfg.candidates.crowns
-            crowns = (
-                silhouette_crowns(silhouettes, self.rig[cam], crowns_cfg)
-                if crowns_cfg.enabled
-                else None
-            )
-            t4 = time.perf_counter()
-            timings["background"] += 1000 * (t1 - t0)
-            timings["skin"] += 1000 * (t2 - t1)
-            timings["blobs"] += 1000 * (t3 - t2)
-            timings["crowns"] += 1000 * (t4 - t3)
-            observations[cam] = CameraObservation(cam, silhouettes, skin, blobs, crowns)
+            for step, sec in seconds.items():
+                timings[step] += 1000 * sec
         return observations
 
     def step(self, fs: FrameSet) -> FrameResult:
         """Process one frame set through every stage."""
-        timings = dict.fromkeys(("background", "skin", "blobs", "crowns"), 0.0)
+        timings = dict.fromkeys(CAMERA_STEPS, 0.0)
         observations = self._observe(fs, timings)
         self._n_framesets += 1
         learning = any(bg.learning for bg in self.backgrounds.values())
