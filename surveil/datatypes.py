@@ -173,6 +173,8 @@ class CandidateSet:
     blob_pairs : (K, 2) int, optional -- blob indices in those two views (-1 likewise)
     rescued : (K,) bool, optional -- kept only because a tracked target was expected there
         (``surveil.recon.candidates.rescue_expected``); explaining away dropped it
+    head_only : (K,) bool, optional -- evidence of a head only (the silhouettes' crowns,
+        ``surveil.recon.crowns``): the tracker lets no hand's tracker take it
     """
 
     points_m: np.ndarray
@@ -181,6 +183,7 @@ class CandidateSet:
     cam_pairs: np.ndarray | None = None
     blob_pairs: np.ndarray | None = None
     rescued: np.ndarray | None = None
+    head_only: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         k = len(self.points_m)
@@ -192,6 +195,7 @@ class CandidateSet:
             ("cam_pairs", (k, 2), np.integer),
             ("blob_pairs", (k, 2), np.integer),
             ("rescued", (k,), np.bool_),
+            ("head_only", (k,), np.bool_),
         ):
             value = getattr(self, name)
             if value is not None:

@@ -79,7 +79,7 @@ def with_arm_hands(
 ) -> CandidateSet:
     """``candidates`` followed by :func:`arm_hand_points` with prior ``cfg.feed_prior``;
     their ``cam_pairs`` and ``blob_pairs`` rows are -1, ``half_gap_m`` NaN (no camera
-    pair made them) and ``rescued`` false."""
+    pair made them), ``rescued`` and ``head_only`` false."""
     extra = arm_hand_points(candidates, poses, observations, rig, cfg, support_radius_px)
     if not len(extra):
         return candidates
@@ -97,4 +97,5 @@ def with_arm_hands(
         cam_pairs=rows(candidates.cam_pairs, -1),
         blob_pairs=rows(candidates.blob_pairs, -1),
         rescued=rows(candidates.rescued, False),
+        head_only=rows(candidates.head_only, False),
     )

@@ -29,6 +29,7 @@ def _empty() -> CandidateSet:
         half_gap_m=np.zeros(0),
         cam_pairs=np.zeros((0, 2), dtype=np.int64),
         blob_pairs=np.zeros((0, 2), dtype=np.int64),
+        head_only=np.zeros(0, dtype=bool),
     )
 
 
@@ -432,7 +433,8 @@ def with_crowns(
     skin: CandidateSet, by_cam: Mapping[int, CameraObservation], rig: Rig, cfg: CrownConfig
 ) -> CandidateSet:
     """``skin`` and after it the crowns' heads (:func:`crown_heads`) farther than
-    ``cfg.skin_clear_m`` from every skin candidate, with prior ``cfg.prior``. Each view's
+    ``cfg.skin_clear_m`` from every skin candidate, with prior ``cfg.prior`` and marked
+    ``head_only`` (the skin candidates are not). Each view's
     crowns are its observation's (``crowns_px``), or found here when it has none."""
     crowns = {
         m: silhouette_crowns(o.silhouettes, rig.cameras[m], cfg)
@@ -461,6 +463,7 @@ def with_crowns(
         cam_pairs=column(skin.cam_pairs, -1, np.full((k, 2), -1, np.int64)),
         blob_pairs=column(skin.blob_pairs, -1, np.full((k, 2), -1, np.int64)),
         rescued=column(skin.rescued, False, np.zeros(k, bool)),
+        head_only=column(skin.head_only, False, np.ones(k, bool)),
     )
 
 
@@ -612,4 +615,5 @@ def _skin_candidates(
         cam_pairs=cam_pairs,
         blob_pairs=blob_pairs,
         rescued=rescued,
+        head_only=np.zeros(len(points), dtype=bool),
     )

@@ -209,6 +209,7 @@ class _Pending:
     # consecutive frame sets seen at all, strong or weak (a weak seed, prior below
     # init_prior_min, has count 0: it may only re-acquire a lost target)
     seen: int = 0
+    head_only: bool = False  # its candidate is evidence of a head only (a crown head)
 
 
 class MultiTargetTracker:
@@ -254,6 +255,7 @@ class MultiTargetTracker:
         self._next_person = 1
         self._last_t_ns: int | None = None
         self._shares: dict[int, np.ndarray] = {}  # tracker id -> exclusion share per candidate
+        self._head_only = np.zeros(0, dtype=bool)  # this step's candidates no hand may take
         # (t_ns, (k, 3) unexplained candidates) of the last UNEXPLAINED_LOG_S seconds
         self._unexplained_log: deque[tuple[int, np.ndarray]] = deque()
 
@@ -303,6 +305,10 @@ class MultiTargetTracker:
         self._last_t_ns = t_ns
         pts = np.asarray(candidates.points_m, dtype=np.float64)
         prior = np.asarray(candidates.prior, dtype=np.float64)
+        typed = self.cfg.filter.heads_only_for_heads and candidates.head_only is not None
+        self._head_only = (
+            np.asarray(candidates.head_only, dtype=bool) if typed else np.zeros(len(pts), bool)
+        )
 
         self._filter(pts, prior, dt_s)
         self._count_rescued(pts, candidates.rescued)
@@ -312,13 +318,14 @@ class MultiTargetTracker:
         reacquired = self._reacquire(seeds, t_ns)
         used = set(reacquired.values())  # seeds taken: no tracker starts on them
         reacquired = self._restart_unsupported(reacquired, seeds)
-        strong = [sd for sd in seeds if sd.count > 0]
+        strong = [sd for sd in seeds if sd.count > 0 and not sd.head_only]
         merged = self._merge_lost(t_ns, reacquired, pairs, strong)
         weak = {i for i, sd in enumerate(seeds) if sd.count == 0}  # they only re-acquire
+        heads_only = {i for i, sd in enumerate(seeds) if sd.head_only}  # no hand's
         used |= self._return_drifted(seeds, used | weak)
         used |= self._split_on_seeds(seeds, used | weak)
-        used |= self._split_out_of_reach(seeds, used | weak)
-        used |= self._return_slid_hands(seeds, used | weak)
+        used |= self._split_out_of_reach(seeds, used | weak | heads_only)
+        used |= self._return_slid_hands(seeds, used | weak | heads_only)
         self._split_on_third_hand(t_ns)
         self._split_on_home_hand(t_ns)
         rel_v = self._candidate_rel_v(candidates, observations)
@@ -349,6 +356,11 @@ class MultiTargetTracker:
         return min(dt_s, self.cfg.filter.max_dt_s)
 
     # ------------------------------------------------------------------ 1-2: SIR filters
+
+    @staticmethod
+    def _hand_like(tr: _Track) -> bool:
+        """Typed or labelled as a hand: no head-only candidate (a crown head) is its."""
+        return tr.is_hand is True or tr.limb.is_hand
 
     def _block_rows(self, blocks: np.ndarray) -> np.ndarray:
         n = self.cfg.filter.n_particles
@@ -389,11 +401,18 @@ class MultiTargetTracker:
         starts = np.arange(len(blocks)) * n
         weights = prior
         shares = np.ones((len(blocks), len(pts)))
+        allowed = None
+        if self._head_only.any():
+            hands = np.array([self._hand_like(tr) for tr in act_tracks])
+            allowed = ~(hands[:, None] & self._head_only[None, :])
         if fcfg.exclusion and len(pts) and len(blocks) > 1:
             pred = st[:, :3].reshape(len(blocks), n, 3)
             shares = sir.claim_shares(
-                pred.mean(axis=1), pred.var(axis=1).mean(axis=1), pts, fcfg.sigma_m
+                pred.mean(axis=1), pred.var(axis=1).mean(axis=1), pts, fcfg.sigma_m, allowed
             )
+            weights = np.repeat(shares * prior[None, :], n, axis=0)
+        elif allowed is not None:
+            shares = allowed.astype(np.float64)
             weights = np.repeat(shares * prior[None, :], n, axis=0)
         self._shares = {tr.id: shares[i] for i, tr in enumerate(act_tracks)}
         # eq. 17 for all particles of all targets at once; w_k ∝ p(z|x) (eq. 12, SIR)
@@ -741,11 +760,19 @@ class MultiTargetTracker:
                     prev.first_ns,
                     dict(prev.pair_first_m),
                     seen,
+                    bool(self._head_only[k]),
                 )
             else:
                 if prev is not None:
                     taken_prev.add(best)
-                seed = _Pending(pts[k].copy(), int(strong), np.zeros(3), t_ns, seen=seen)
+                seed = _Pending(
+                    pts[k].copy(),
+                    int(strong),
+                    np.zeros(3),
+                    t_ns,
+                    seen=seen,
+                    head_only=bool(self._head_only[k]),
+                )
             for tr in combined:
                 seed.pair_first_m.setdefault(tr.id, float(np.linalg.norm(pts[k] - tr.mean_m)))
             seeds.append(seed)
@@ -825,6 +852,8 @@ class MultiTargetTracker:
                 tid = self._stood_there(pair, sd.position_m)
                 back = self._tracks.get(tid) if tid is not None else None
                 if back is None or back.phase is not Phase.NORMAL or not back.labelled:
+                    continue
+                if sd.head_only and self._hand_like(back):
                     continue
                 for t in (pair, other):
                     t.ghosts_m.append(back.mean_m.copy())
@@ -969,13 +998,19 @@ class MultiTargetTracker:
             if tr.id in parted or tr.apart_frames >= lc.separate_frames:
                 continue
             other = self._tracks[tr.partner]
-            d = np.array([np.linalg.norm(seeds[i].position_m - tr.mean_m) for i in free])
-            d0 = np.array([seeds[i].pair_first_m.get(tr.id, np.inf) for i in free])
+            if self._hand_like(tr) and self._hand_like(other):
+                free_here = [i for i in free if not seeds[i].head_only]
+            else:
+                free_here = free
+            if not free_here:
+                continue
+            d = np.array([np.linalg.norm(seeds[i].position_m - tr.mean_m) for i in free_here])
+            d0 = np.array([seeds[i].pair_first_m.get(tr.id, np.inf) for i in free_here])
             heads = self._owner_heads(tr, other)
             head_first = self._head_and_own_hand(tr, other)
             if head_first is None:
                 fit = np.array(
-                    [self._parting_fit(heads, tr.mean_m, seeds[i].position_m) for i in free]
+                    [self._parting_fit(heads, tr.mean_m, seeds[i].position_m) for i in free_here]
                 )
             else:  # a person's hand is never beyond arm's reach of their head
                 fit = np.where(d <= self.cfg.labelling.arm_reach_m, 2, 0)
@@ -985,21 +1020,23 @@ class MultiTargetTracker:
                 & ((d0 <= lc.pair_seed_gate_m) | (fit > 1))
             )
             for j in np.flatnonzero(ok):
-                seed = seeds[free[j]]
+                seed = seeds[free_here[j]]
                 ok[j] = not self._there_as_pair_joined(tr, seed.position_m, seed.first_ns)
-            confirmed = np.array([seeds[i].count >= lc.init_confirm_frames for i in free])
+            confirmed = np.array([seeds[i].count >= lc.init_confirm_frames for i in free_here])
             if not (ok & confirmed).any():
                 continue
             both = None
             if head_first is None:
-                both = self._both_leaving(tr, heads, [seeds[free[j]] for j in np.flatnonzero(ok)])
+                both = self._both_leaving(
+                    tr, heads, [seeds[free_here[j]] for j in np.flatnonzero(ok)]
+                )
             fixed: tuple[int | None, int | None] = (None, None)
             if both is not None:
-                picked = [free[j] for j in np.flatnonzero(ok)[list(both)]]
+                picked = [free_here[j] for j in np.flatnonzero(ok)[list(both)]]
                 modes = np.array([seeds[i].position_m for i in picked])
                 vels = np.array([seeds[i].velocity_mps for i in picked])
             else:
-                picked = [free[int(np.argmin(np.where(ok & confirmed, d0, np.inf)))]]
+                picked = [free_here[int(np.argmin(np.where(ok & confirmed, d0, np.inf)))]]
                 seed = seeds[picked[0]]
                 modes = np.array([tr.mean_m, seed.position_m])
                 vels = np.array([tr.vel_mps, seed.velocity_mps])
@@ -1425,6 +1462,9 @@ class MultiTargetTracker:
             strong = np.array([sd.count >= lc.init_confirm_frames for sd in seeds])
             to_head = np.linalg.norm(sp[None] - np.array(their_heads)[:, None], axis=2)
             ok[len(lost) :] &= strong[None] & (to_head <= self.cfg.labelling.arm_reach_m)
+        crown = np.array([sd.head_only for sd in seeds])
+        if crown.any():  # a crown head re-acquires no hand
+            ok &= ~(np.array([self._hand_like(tr) for tr in rows_tr])[:, None] & crown[None])
         if lc.reacquire_own_body:
             ok &= ~self._claimed_by_others(rows_tr, sp)
         cost = np.where(ok, d, 1e6)
@@ -1651,11 +1691,14 @@ class MultiTargetTracker:
         if untyped:
             below = lab.below_another(pos, lcfg)
             rel_v = np.full(len(act), np.nan)
-            if len(pts) and np.isfinite(cand_rel_v).any():
+            on_crown = np.zeros(len(act), dtype=bool)
+            if len(pts):
                 d = np.linalg.norm(pos[:, None] - pts[None], axis=2)
                 near = d.argmin(axis=1)
                 ok = d[np.arange(len(act)), near] <= 2 * self.cfg.filter.sigma_m
                 rel_v[ok] = cand_rel_v[near[ok]]
+                # typed a hand, a tracker held by a crown head would lose its support
+                on_crown[ok] = self._head_only[near[ok]]
             speed = np.array([tr.speed_ema_mps for tr in act])
             llr = lab.head_log_odds(pos[:, 2], speed, below, rel_v, lcfg)
             for i in untyped:
@@ -1673,7 +1716,7 @@ class MultiTargetTracker:
                 ):
                     tr.is_hand = False
                     self._new_person(tr, t_ns)
-                elif tr.type_llr <= -lcfg.decide_llr:
+                elif tr.type_llr <= -lcfg.decide_llr and not on_crown[i]:
                     tr.is_hand = True
         self._detach_astray(t_ns)
         self._attach_hands(t_ns, returning)

@@ -60,6 +60,12 @@ class FilterConfig:
         "instead of letting it support every target fully: a target cannot feed on a "
         "candidate another target explains better (not in the paper; docs/tracking.md)",
     )
+    heads_only_for_heads: bool = setting(
+        True,
+        "a candidate marked head_only (a crown head, docs/candidates.md 'Crowns') supports "
+        "no tracker typed as a hand, starts no hand's re-acquisition and parts no pair of "
+        "hands (docs/tracking.md, 'Typed candidates')",
+    )
     clutter_level: float = setting(
         1e-3,
         "constant added to the unnormalised likelihood (no candidate = flat weights), unitless",

@@ -471,9 +471,14 @@ def block_mean_cov(
 
 
 def claim_shares(
-    means_m: np.ndarray, spreads_m2: np.ndarray, cand_points_m: np.ndarray, sigma_m: float
+    means_m: np.ndarray,
+    spreads_m2: np.ndarray,
+    cand_points_m: np.ndarray,
+    sigma_m: float,
+    allowed: np.ndarray | None = None,
 ) -> np.ndarray:
-    """(T, K) share of each candidate claimed by each target (columns sum to 1).
+    """(T, K) share of each candidate claimed by each target (columns sum to 1, or are 0
+    where no target may claim the candidate).
 
     Target t claims candidate c in proportion to the density of Z_c under its predicted
     cloud widened by the candidate noise, N(Z_c; mu_t, (s_t^2 + sigma^2) I): with two targets
@@ -488,6 +493,8 @@ def claim_shares(
     spreads_m2 : (T,) float64 -- their per-axis variances (mean of the three), m^2
     cand_points_m : (K, 3) float64
     sigma_m : float -- the likelihood's sigma
+    allowed : (T, K) bool, optional -- which targets may claim which candidates (a crown
+        head is no hand's); the others share what the disallowed would have taken
 
     Examples
     --------
@@ -499,6 +506,9 @@ def claim_shares(
     var = np.asarray(spreads_m2, dtype=np.float64)[:, None] + sigma_m * sigma_m  # (T, 1)
     d2 = np.square(means_m[:, None, :] - cand_points_m[None, :, :]).sum(axis=2)  # (T, K)
     log_dens = -0.5 * d2 / var - 1.5 * np.log(var)
-    log_dens -= log_dens.max(axis=0, keepdims=True)
-    dens = np.exp(log_dens)
-    return dens / dens.sum(axis=0, keepdims=True)
+    if allowed is not None:
+        log_dens = np.where(allowed, log_dens, -np.inf)
+    top = log_dens.max(axis=0, keepdims=True)
+    dens = np.exp(log_dens - np.where(np.isfinite(top), top, 0.0))
+    total = dens.sum(axis=0, keepdims=True)
+    return dens / np.where(total > 0, total, 1.0)

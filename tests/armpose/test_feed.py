@@ -100,6 +100,7 @@ def test_fed_candidates_follow_the_camera_candidates(with_pairs):
             half_gap_m=np.zeros(2),
             cam_pairs=np.array([[0, 1], [0, 1]]),
             blob_pairs=np.array([[0, 0], [2, 1]]),
+            head_only=np.array([False, True]),
         )
     out = with_arm_hands(base, [pose(LEFT, RIGHT)], obs, RIG, CFG, RADIUS_PX)
     assert len(out.points_m) == 3
@@ -109,6 +110,7 @@ def test_fed_candidates_follow_the_camera_candidates(with_pairs):
         assert out.cam_pairs[2].tolist() == [-1, -1]
         assert out.blob_pairs[2].tolist() == [-1, -1]
         assert np.isnan(out.half_gap_m[2])
+        assert out.head_only.tolist() == [False, True, False]  # an arm's hand is a hand
     else:
         assert out.cam_pairs is None
 

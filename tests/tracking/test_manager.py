@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -145,6 +147,28 @@ def test_disappear_reappear_keeps_id_and_label(rig, rng):
     assert 46 <= lost_at <= 49 and 53 <= back_at <= 56
     assert all(t.label == "p1/left_hand" for _, t in mine if _ >= 45)
     assert by_label(out[-1])["p1/left_hand"] is not None
+
+
+@pytest.mark.parametrize("typed", [True, False])
+def test_a_crown_head_supports_a_head_and_no_hand(rig, rng, typed):
+    """A candidate marked head_only (a crown head) keeps a head's tracker; in place of a
+    hand's candidate it does not keep the hand's: the hand goes lost."""
+    frames = two_people_frames(70, b_from=0)
+    cfg = dataclasses.replace(LONE, filter=FilterConfig(heads_only_for_heads=typed))
+    trk = MultiTargetTracker(cfg, rig, seed=4)
+    out = run(trk, frames[:40], rng)
+    ids = {s.label: s.target_id for s in out[-1].targets}
+    head_only = np.array([True, False, True, False, False, False])  # p1's head, right hand
+    for i, pts in enumerate(frames[40:], start=40):
+        c = candidates(pts, rng)
+        out.append(trk.step(i * DT_NS, dataclasses.replace(c, head_only=head_only)))
+    phases = {s.target_id: s.phase for s in out[-1].targets}
+    assert phases[ids["p1/head"]] is Phase.NORMAL
+    assert phases[ids["p1/left_hand"]] is Phase.NORMAL
+    assert phases[ids["p1/right_hand"]] is (Phase.LOST if typed else Phase.NORMAL)
+    if typed:  # nor is the tracker that the crown head starts typed as a hand
+        labels = {s.label for s in out[-1].targets if s.phase is not Phase.LOST}
+        assert "p1/right_hand" not in labels
 
 
 def test_a_person_who_leaves_is_retired(rig, rng):

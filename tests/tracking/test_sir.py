@@ -159,3 +159,19 @@ def test_block_mean_cov_matches_numpy(rng):
     for b, sl in enumerate((slice(0, 5), slice(5, 12))):
         assert np.allclose(mean[b], np.average(pts[sl], axis=0, weights=w[sl]))
         assert np.allclose(cov[b], np.cov(pts[sl].T, aweights=w[sl], bias=True))
+
+
+def test_claim_shares_split_by_closeness_and_only_among_allowed_targets():
+    means = np.array([[0.0, 0, 0], [0.2, 0, 0]])
+    cands = np.array([[0.01, 0, 0], [0.1, 0, 0], [0.19, 0, 0]])
+    shares = sir.claim_shares(means, np.full(2, 1e-4), cands, 0.03)
+    np.testing.assert_allclose(shares.sum(axis=0), 1.0)
+    assert shares[0, 0] > 0.99 and shares[1, 2] > 0.99
+    np.testing.assert_allclose(shares[:, 1], 0.5)
+    # the nearer target may not take the first candidate (a crown head, target 0 a hand):
+    # the other takes all of it, however far; a candidate nobody may take is nobody's
+    allowed = np.array([[False, True, False], [True, True, False]])
+    shares = sir.claim_shares(means, np.full(2, 1e-4), cands, 0.03, allowed)
+    np.testing.assert_allclose(shares[:, 0], [0.0, 1.0])
+    np.testing.assert_allclose(shares[:, 1], 0.5)
+    np.testing.assert_array_equal(shares[:, 2], 0.0)
