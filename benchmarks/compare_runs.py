@@ -1,5 +1,5 @@
 """Two sets of runs side by side, per scene and seed: events matched and false, identity
-switches, hand error, false targets per frame.
+switches, head and hand error, false targets per frame.
 
     python benchmarks/compare_runs.py --a CONFIG_A[,CONFIG_A2] --b CONFIG_B[,CONFIG_B2]
         [--seeds 0-5] [--out out/bench_synth] [--out-b DIR] [--all] [NAME ...]
@@ -18,8 +18,9 @@ models that ``camera_skin_models.py`` makes).
 Prints the rows that differ (``--all``: every row), the totals of each side, and how far
 B's events (matched minus false, per run) and identity switches can be told from A's over
 paired runs: a bootstrap interval of the total difference and a sign test
-(:mod:`surveil.eval.paired`). Scenes and seeds where either side has no run are skipped and
-counted.
+(:mod:`surveil.eval.paired`); then, per scene, each side's means over the seeds of tracking
+recall, head and hand error and false targets per frame. Scenes and seeds where either side
+has no run are skipped and counted.
 """
 
 from __future__ import annotations
@@ -44,7 +45,8 @@ from pipeline_bench import (  # noqa: E402
 from surveil.eval.paired import paired_difference  # noqa: E402
 from surveil.eval.score import EvalConfig, evaluate  # noqa: E402
 
-COLUMNS = ("matched", "false", "switches", "hand mm", "false / frame")
+COLUMNS = ("matched", "false", "switches", "head mm", "hand mm", "false / frame")
+MEANS = ("recall", "head mm", "hand mm", "false / frame")
 
 
 def _configs(text: str) -> list[Path | None]:
@@ -82,17 +84,20 @@ class Pooled:
         )
 
 
-def scores(out: Path, name: str, mcap: Path) -> tuple[tuple[int, int, int, float, float], Pooled]:
-    """(events matched, false events, identity switches, mean hand error mm, false targets
-    per frame) of one run, and its matched events' climax errors and exchange directions."""
+def scores(out: Path, name: str, mcap: Path) -> tuple[tuple, Pooled]:
+    """(events matched, false events, identity switches, mean head error mm, mean hand error
+    mm, false targets per frame, tracking recall) of one run, and its matched events' climax
+    errors and exchange directions."""
     report = evaluate(out / name, mcap, EvalConfig())
     e, t = report.events, report.targets
     row = (
         e.n_matched,
         e.n_pred - e.n_matched,
         t.id_switches,
+        t.head_error_mm_mean or float("nan"),
         t.hand_error_mm_mean or float("nan"),
         t.false_targets_per_frame or 0.0,
+        t.recall or 0.0,
     )
     pooled = Pooled(
         [x for a in e.activities for x in a.climax_errors_ms],
@@ -102,8 +107,14 @@ def scores(out: Path, name: str, mcap: Path) -> tuple[tuple[int, int, int, float
     return row, pooled
 
 
-def _cells(row: tuple[int, int, int, float, float]) -> str:
-    return f"{row[0]} | {row[1]} | {row[2]} | {row[3]:.0f} | {row[4]:.2f}"
+def _cells(row: tuple) -> str:
+    return f"{row[0]} | {row[1]} | {row[2]} | {row[3]:.0f} | {row[4]:.0f} | {row[5]:.2f}"
+
+
+def _means(rows: list[tuple]) -> str:
+    """Cells of MEANS: the mean over runs of recall, head and hand error, false per frame."""
+    m = np.nanmean(np.array([(r[6], r[3], r[4], r[5]) for r in rows], dtype=float), axis=0)
+    return f"{m[0]:.3f} | {m[1]:.1f} | {m[2]:.1f} | {m[3]:.2f}"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -121,6 +132,7 @@ def main(argv: list[str] | None = None) -> int:
     counts: list[list[tuple]] = [[], []]  # per side, per run: matched, false, switches
     pooled = [Pooled(), Pooled()]
     skipped = 0
+    by_scene: dict[str, tuple[list[tuple], list[tuple]]] = {}
     head = " | ".join(COLUMNS)
     print(f"| scene | seed | A: {head} | B: {head} |")
     print("|---|---|" + "---|" * (2 * len(COLUMNS)))
@@ -137,6 +149,9 @@ def main(argv: list[str] | None = None) -> int:
             )
             counts[0].append(a[:3])
             counts[1].append(b[:3])
+            scene = by_scene.setdefault(name, ([], []))
+            scene[0].append(a)
+            scene[1].append(b)
             pooled[0].add(pa)
             pooled[1].add(pb)
             if args.all or a[:3] != b[:3]:
@@ -152,6 +167,12 @@ def main(argv: list[str] | None = None) -> int:
         diff = paired_difference(a_runs[:, 0] - a_runs[:, 1], b_runs[:, 0] - b_runs[:, 1])
         print(diff.summary("events matched minus false"))
         print(paired_difference(a_runs[:, 2], b_runs[:, 2]).summary("identity switches"))
+    if by_scene:
+        cols = " | ".join(MEANS)
+        print(f"\n| scene, mean over seeds | A: {cols} | B: {cols} |")
+        print("|---|" + "---|" * (2 * len(MEANS)))
+        for name, (a_rows, b_rows) in by_scene.items():
+            print(f"| {name} | {_means(a_rows)} | {_means(b_rows)} |")
     if skipped:
         print(f"{skipped} scene and seed pairs skipped: a side has no run of them")
     return 0
