@@ -362,6 +362,21 @@ class MultiTargetTracker:
         """Typed or labelled as a hand: no head-only candidate (a crown head) is its."""
         return tr.is_hand is True or tr.limb.is_hand
 
+    def _lost_claimants(self) -> list[_Track]:
+        """Labelled targets lost at most ``lost_claim_s`` ago: they still claim candidates."""
+        window = self.cfg.filter.lost_claim_s
+        if window <= 0 or self._last_t_ns is None:
+            return []
+        since = self._last_t_ns - int(window * 1e9)
+        return [
+            tr
+            for tr in self._tracks.values()
+            if tr.phase is Phase.LOST
+            and tr.labelled
+            and tr.lost_since_ns is not None
+            and tr.lost_since_ns >= since
+        ]
+
     def _block_rows(self, blocks: np.ndarray) -> np.ndarray:
         n = self.cfg.filter.n_particles
         return (np.asarray(blocks)[:, None] * n + np.arange(n)).ravel()
@@ -405,11 +420,22 @@ class MultiTargetTracker:
         if self._head_only.any():
             hands = np.array([self._hand_like(tr) for tr in act_tracks])
             allowed = ~(hands[:, None] & self._head_only[None, :])
-        if fcfg.exclusion and len(pts) and len(blocks) > 1:
+        lost = self._lost_claimants() if fcfg.exclusion else []
+        if fcfg.exclusion and len(pts) and len(blocks) + len(lost) > 1:
             pred = st[:, :3].reshape(len(blocks), n, 3)
-            shares = sir.claim_shares(
-                pred.mean(axis=1), pred.var(axis=1).mean(axis=1), pts, fcfg.sigma_m, allowed
-            )
+            means, spreads = pred.mean(axis=1), pred.var(axis=1).mean(axis=1)
+            if lost:
+                means = np.vstack([means, [self._lost_prior_m(tr) for tr in lost]])
+                spreads = np.concatenate([spreads, np.full(len(lost), fcfg.lost_claim_std_m**2)])
+                if allowed is not None:
+                    lost_hands = np.array([self._hand_like(tr) for tr in lost])
+                    allowed = np.vstack(
+                        [allowed, ~(lost_hands[:, None] & self._head_only[None, :])]
+                    )
+            shares = sir.claim_shares(means, spreads, pts, fcfg.sigma_m, allowed)
+            shares = shares[: len(blocks)]
+            if allowed is not None:
+                allowed = allowed[: len(blocks)]
             weights = np.repeat(shares * prior[None, :], n, axis=0)
         elif allowed is not None:
             shares = allowed.astype(np.float64)

@@ -60,6 +60,18 @@ class FilterConfig:
         "instead of letting it support every target fully: a target cannot feed on a "
         "candidate another target explains better (not in the paper; docs/tracking.md)",
     )
+    lost_claim_s: float = setting(
+        0.0,
+        "a labelled target lost at most this long still claims its share of the candidates "
+        "near where it is looked for (exclusion): a neighbour's tracker cannot slide onto "
+        "its candidate when it shows again, s (0 = only active targets claim)",
+        min=0.0,
+    )
+    lost_claim_std_m: float = setting(
+        0.05,
+        "... the spread of such a lost target's claim around that position, m",
+        min=1e-3,
+    )
     heads_only_for_heads: bool = setting(
         True,
         "a candidate marked head_only (a crown head, docs/candidates.md 'Crowns') supports "

@@ -1997,3 +1997,25 @@ def test_a_hand_that_outran_its_tracker_is_not_taken_by_its_lost_other_hand(rig,
         assert on_left.target_id == before["p1/left_hand"] and on_left.label == "p1/left_hand"
     else:
         assert on_left.target_id == before["p1/right_hand"]
+
+
+@pytest.mark.parametrize("lost_claim_s", [0.5, 0.0])
+def test_a_hand_lost_beside_another_keeps_its_candidate_from_the_neighbour(rig, rng, lost_claim_s):
+    """Two people hold their right hands out 24 cm apart (the negative scene). b's
+    candidate vanishes and b's tracker is lost; then a's candidate vanishes just as b's
+    comes back. Only active targets claiming candidates, a's tracker, unsupported and
+    spreading, slides onto b's candidate, and when a's shows again b's lost tracker takes
+    it: the two hands swap trackers. A labelled target lost at most ``lost_claim_s`` still
+    claims the candidates around where it is looked for, so a's tracker stays clear of b's
+    candidate and each hand keeps its own."""
+    held_a, held_b = np.array([2.38, 1.95, 1.05]), np.array([2.62, 1.97, 1.05])
+    frames, rest = right_hands_held_out(held_a, held_b)
+    frames += [[*rest, held_a, held_b]] * 15 + [[*rest, held_a]] * 6
+    frames += [[*rest, held_b]] * 3 + [[*rest, held_a, held_b]] * 4
+    cfg = TrackingConfig(filter=FilterConfig(lost_claim_s=lost_claim_s))
+    out = run(MultiTargetTracker(cfg, rig, seed=13), frames, rng)
+    owners = (_owner_of(out[-1], held_a), _owner_of(out[-1], held_b))
+    if lost_claim_s > 0:
+        assert owners == ("p1/right_hand", "p2/right_hand")
+    else:
+        assert owners == ("p2/right_hand", "p1/right_hand")
