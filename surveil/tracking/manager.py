@@ -416,26 +416,20 @@ class MultiTargetTracker:
         starts = np.arange(len(blocks)) * n
         weights = prior
         shares = np.ones((len(blocks), len(pts)))
+        # labelled targets lost a moment ago still claim their candidates (lost_claim_s)
+        lost = self._lost_claimants() if fcfg.exclusion else []
+        claimants = act_tracks + lost
         allowed = None
         if self._head_only.any():
-            hands = np.array([self._hand_like(tr) for tr in act_tracks])
+            hands = np.array([self._hand_like(tr) for tr in claimants])
             allowed = ~(hands[:, None] & self._head_only[None, :])
-        lost = self._lost_claimants() if fcfg.exclusion else []
-        if fcfg.exclusion and len(pts) and len(blocks) + len(lost) > 1:
+        if fcfg.exclusion and len(pts) and len(claimants) > 1:
             pred = st[:, :3].reshape(len(blocks), n, 3)
-            means, spreads = pred.mean(axis=1), pred.var(axis=1).mean(axis=1)
-            if lost:
-                means = np.vstack([means, [self._lost_prior_m(tr) for tr in lost]])
-                spreads = np.concatenate([spreads, np.full(len(lost), fcfg.lost_claim_std_m**2)])
-                if allowed is not None:
-                    lost_hands = np.array([self._hand_like(tr) for tr in lost])
-                    allowed = np.vstack(
-                        [allowed, ~(lost_hands[:, None] & self._head_only[None, :])]
-                    )
-            shares = sir.claim_shares(means, spreads, pts, fcfg.sigma_m, allowed)
-            shares = shares[: len(blocks)]
-            if allowed is not None:
-                allowed = allowed[: len(blocks)]
+            means = np.vstack([pred.mean(axis=1), *[self._lost_prior_m(tr) for tr in lost]])
+            spreads = np.concatenate(
+                [pred.var(axis=1).mean(axis=1), np.full(len(lost), fcfg.lost_claim_std_m**2)]
+            )
+            shares = sir.claim_shares(means, spreads, pts, fcfg.sigma_m, allowed)[: len(blocks)]
             weights = np.repeat(shares * prior[None, :], n, axis=0)
         elif allowed is not None:
             shares = allowed.astype(np.float64)
