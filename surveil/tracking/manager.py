@@ -152,6 +152,8 @@ class _Track:
     # where such targets' trackers had drifted to, since, before they were put back
     ghosts_m: list[np.ndarray] = field(default_factory=list)
     joined_apart: bool = False  # it combined while combine_distance_m or more from its partner
+    # the partner of its latest pair that parted as never met, when, and where it restarted
+    never_met: tuple[int, int, np.ndarray] | None = None
     unjoin_frames: int = 0  # consecutive frame sets whose modes say the pair never met
     body_fails: int = 0  # frame sets in which it failed the body check (a head candidate)
     before_vec_m: np.ndarray | None = None
@@ -313,6 +315,7 @@ class MultiTargetTracker:
         self._filter(pts, prior, dt_s)
         self._count_rescued(pts, candidates.rescued)
         pairs, drifted = self._combine_pairs()
+        self._unlabel_astray_joiners(pairs)
         self._measure_separation(pts, prior, dt_s, t_ns)
         seeds = self._update_seeds(pts, prior, dt_s, t_ns)
         reacquired = self._reacquire(seeds, t_ns)
@@ -1818,6 +1821,31 @@ class MultiTargetTracker:
                 p.hand_ids.remove(hid)
                 h.take_label_off()
 
+    def _unlabel_astray_joiners(self, pairs: dict[int, int]) -> None:
+        """Take the label off a person's hand that is about to combine while out of its
+        person's reach and within another's (:func:`lab.astray`, ``astray_at_join``) now,
+        not after ``reach_revise_s``: the activity stage reads who met from the labels at
+        the join. A tracker that slid onto another person's hand and followed it home is
+        beyond its own head's reach when a second tracker finds that hand (negative scene
+        with the bare-forearm option, seed 2, 12.33 s: 1.25 m from its head), and the join
+        would be a handshake between one person's two trackers."""
+        if not (pairs and self.cfg.labelling.astray_at_join):
+            return
+        persons, heads = self._live_heads()
+        for i, p in enumerate(persons):
+            others = np.delete(heads, i, axis=0)
+            for hid in [h for h in p.hand_ids if h in pairs]:
+                h = self._tracks[hid]
+                if lab.astray(h.mean_m, heads[i], others, self.cfg.labelling):
+                    log.debug(
+                        "t%d (%s) joins out of p%d's reach: label taken off",
+                        hid,
+                        h.label,
+                        p.number,
+                    )
+                    p.hand_ids.remove(hid)
+                    h.take_label_off()
+
     def _attach_hands(self, t_ns: int, returning: set[int]) -> None:
         persons, heads = self._live_heads()
         if not persons:
@@ -2289,6 +2317,9 @@ class MultiTargetTracker:
                 tr.out_of_reach_frames = 0
                 gap = float(np.linalg.norm(tr.mean_m - self._tracks[partner_id].mean_m))
                 tr.joined_apart = gap >= lc.combine_distance_m
+                rejoin = self._rejoin_place(tr, partner_id, t_ns)
+                if rejoin is not None:
+                    tr.joined_apart, tr.joined_m = True, rejoin
                 tr.unjoin_frames = 0
                 tr.before_vec_m = self._before_vector(tr, self._tracks[partner_id])
                 tr.apart_frames = 0
@@ -2296,7 +2327,7 @@ class MultiTargetTracker:
                 partner_id = tr.partner
                 met = tr.unjoin_frames < lc.separate_frames
                 if new is Phase.UNLABELLED and tid not in separated_done:
-                    self._separate(tr, self._tracks[partner_id], met)
+                    self._separate(tr, self._tracks[partner_id], t_ns, met)
                     separated_done.update((tid, partner_id))
                 tr.partner = None
                 tr.joined_ns = tr.joined_m = tr.joined_others = None
@@ -2356,7 +2387,7 @@ class MultiTargetTracker:
                 return pb - pa
         return common[0][2] - common[0][1]
 
-    def _separate(self, a: _Track, b: _Track, met: bool = True) -> None:
+    def _separate(self, a: _Track, b: _Track, t_ns: int, met: bool = True) -> None:
         """Give a and b each a mode of the separating pair and restart them there: two people's
         hands by their owners when that is clear (:func:`lab.owner_rule`, ``owner_margin_m``),
         otherwise by the angle rule (section 7.1); a pair that never met (:meth:`_never_met`)
@@ -2385,6 +2416,24 @@ class MultiTargetTracker:
             log.debug("t%d / t%d separate, angle %.0f deg", a.id, b.id, np.degrees(angle))
         self._reinit(a, modes[mode_a], vel[mode_a])
         self._reinit(b, modes[mode_b], vel[mode_b])
+        if not met:
+            a.never_met = (b.id, t_ns, modes[mode_a].copy())
+            b.never_met = (a.id, t_ns, modes[mode_b].copy())
+
+    def _rejoin_place(self, tr: _Track, partner_id: int, t_ns: int) -> np.ndarray | None:
+        """Where ``tr`` parted from ``partner_id`` as never met, if it combines with it again
+        within ``rejoin_never_met_s`` of that; else None. Two hands held 25 cm apart (the
+        negative scene's near miss) part as never met, and their trackers can drift together
+        again on the next merged candidate, this time closer than ``combine_distance_m``:
+        without this the second join counts as a meeting (seed 1 of the bare-forearm
+        option: a false handshake)."""
+        window_s = self.cfg.lifecycle.rejoin_never_met_s
+        if window_s <= 0 or tr.never_met is None:
+            return None
+        partner, parted_ns, place_m = tr.never_met
+        if partner != partner_id or (t_ns - parted_ns) * 1e-9 > window_s:
+            return None
+        return place_m.copy()
 
     def _mode_sides(self, a: _Track, b: _Track, modes: np.ndarray) -> tuple[int, int] | None:
         """The modes of a person's left and right hands ``a`` and ``b``: the one farther to the

@@ -228,6 +228,13 @@ class LifecycleConfig:
         "no coincidence is reported (0 = off), m",
         min=0.0,
     )
+    rejoin_never_met_s: float = setting(
+        1.0,
+        "two trackers whose pair parted as never met and that combine again within this long "
+        "count as joined apart, with where they parted as their places for the never-met "
+        "test (hands held near each other, whose trackers drift together again; 0 = off), s",
+        min=0.0,
+    )
     unjoin_within_s: float = setting(
         0.5,
         "how soon after a join the modes that say its targets never met must appear (the "
@@ -468,6 +475,12 @@ class LabellingConfig:
         "a hand out of its person's reach (arm_reach_m + person_margin_m) and within another's "
         "for this long loses its label and is attached anew (0 = never), s",
         min=0.0,
+    )
+    astray_at_join: bool = setting(
+        True,
+        "a hand about to combine while out of its person's reach and within another's (as "
+        "for reach_revise_s) loses its label at once: a join is a decision point, and a hand "
+        "cannot meet anything beyond its own body's reach",
     )
     contest_s: float = setting(
         0.5,

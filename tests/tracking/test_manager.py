@@ -1143,6 +1143,38 @@ def test_a_hand_taken_for_the_wrong_person_is_relabelled(rig, rng, revise_s):
         assert _owner_of(out[-1], b["right_hand"]).startswith("p1/")
 
 
+@pytest.mark.parametrize("at_join", [True, False])
+def test_a_hand_that_joins_out_of_its_persons_reach_joins_without_their_label(rig, rng, at_join):
+    """a claims b's right hand while b's head is hidden (as above); b shows, the hand goes
+    home, out of a's reach, and b's left hand comes to it at once (a clap), before
+    reach_revise_s has passed. The join is not between a's hand and b's: with
+    astray_at_join the tracker that carried a's label joins unlabelled, and no event could
+    read a meeting of two people's hands; without it, it joins as p1/right_hand."""
+    a, b = body((2.0, 2.0), 0.0), body((3.0, 2.0), 180.0)
+    held = np.array([2.6, 2.0, 1.1])
+    frames = [[a["head"], a["left_hand"], held] for _ in range(20)]
+    frames += [[a["head"], a["left_hand"], held, b["head"], b["left_hand"]] for _ in range(25)]
+    right_b = b["right_hand"]
+    for k in range(6):
+        hand = held + (k + 1) / 6 * (right_b - held)
+        frames.append([a["head"], a["left_hand"], b["head"], b["left_hand"], hand])
+    for k in range(10):
+        u = min((k + 1) / 3, 1.0)
+        left = b["left_hand"] + u * (right_b + [0, -0.04, 0] - b["left_hand"])
+        frames.append([a["head"], a["left_hand"], b["head"], left, right_b])
+    cfg = TrackingConfig(labelling=LabellingConfig(astray_at_join=at_join, contest_by_owner=False))
+    out = run(MultiTargetTracker(cfg, rig, seed=12), frames, rng)
+    assert _owner_of(out[44], held).startswith("p1/")
+    first = next(f for f in out[45:] if any(t.new is Phase.COMBINED for t in f.transitions))
+    labels = {t.label for t in first.transitions if t.new is Phase.COMBINED}
+    assert len(labels) == 2
+    assert any(lab.startswith("p2/") for lab in labels)
+    if at_join:
+        assert not any(lab.startswith("p1/") for lab in labels)
+    else:
+        assert "p1/right_hand" in labels
+
+
 def right_hands_held_out(held_a, held_b) -> tuple[list, list]:
     """Two people, a at x 2.0 facing b at x 3.0, stand still for 40 frame sets, then raise
     their right hands to ``held_a`` and ``held_b`` in 8. Returns (those frames, the other
@@ -1639,6 +1671,44 @@ def test_hands_held_near_each_other_that_never_met_are_parted_where_they_were(
     else:
         assert not parts
         assert all(s.phase is Phase.COMBINED for s in out[-1].targets if "right" in s.label)
+
+
+@pytest.mark.parametrize("rejoin_s", [1.0, 0.0])
+def test_hands_that_never_met_and_drift_together_again_have_still_not_met(rig, rejoin_s):
+    """The near miss above, then a's candidate slides to 5 cm from b's hand and back within
+    0.4 s (the negative scene with the bare-forearm option, seed 1: after the first pair
+    parted as never met, a's tracker drifted onto a candidate between the hands and the
+    two combined again, closer than combine_distance_m, and parted later as a handshake).
+    With rejoin_never_met_s the second pair is joined apart, with the places where the
+    first parted as its own, and parts as never met when the hands show there again;
+    without it the second join is a meeting, and the pair parts as one when the hands go
+    home."""
+    frames, held_a, held_b = near_miss_frames(0.27, 0.05)
+    rest, frames = frames[-1][:-2], frames[:-15]
+    toward = held_b - held_a
+    for u in (0.35, 0.7, 0.8, 0.8, 0.7, 0.35):
+        frames.append([*rest, held_a + u * toward, held_b])
+    frames += [[*rest, held_a, held_b]] * 20
+    a, b = body((2.0, 2.0), 0.0), body((3.0, 2.0), 180.0)
+    for u in np.linspace(0, 1, 7)[1:]:  # the hands go home
+        frames.append(
+            [
+                *rest,
+                held_a + u * (a["right_hand"] - held_a),
+                held_b + u * (b["right_hand"] - held_b),
+            ]
+        )
+    frames += [[*rest, a["right_hand"], b["right_hand"]]] * 10
+    lc = LifecycleConfig(rejoin_never_met_s=rejoin_s)
+    trk = MultiTargetTracker(TrackingConfig(lifecycle=lc), rig, seed=13)
+    out = run(trk, frames, np.random.default_rng(7))
+    joins = [t for f in out for t in f.transitions if t.new is Phase.COMBINED]
+    parts = [t for f in out for t in f.transitions if t.old is Phase.COMBINED]
+    assert len(joins) == 4  # two pairs, one after the other
+    assert len(parts) == 4 and not any(t.met for t in parts[:2])
+    assert all(t.met is (rejoin_s == 0) for t in parts[2:])
+    assert _owner_of(out[-1], a["right_hand"]) == "p1/right_hand"
+    assert _owner_of(out[-1], b["right_hand"]) == "p2/right_hand"
 
 
 @pytest.mark.parametrize("hand_speed_mps, back", [(2.0, True), (0.5, False)])
