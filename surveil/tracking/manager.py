@@ -26,7 +26,7 @@ from __future__ import annotations
 import itertools
 import logging
 from collections import deque
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -1794,32 +1794,39 @@ class MultiTargetTracker:
                 heads.append(head_m)
         return persons, np.array(heads).reshape(-1, 3)
 
-    def _detach_astray(self, t_ns: int) -> None:
-        """Take the label off a hand that stayed out of its person's reach and within
-        another's for ``reach_revise_s`` (:func:`lab.astray`): it tracks someone else's hand,
-        since a pair parted the wrong way round or the tracker slid across. It goes back to
-        unlabelled and is attached anew, and its person's slot is free for the real hand."""
-        lcfg = self.cfg.labelling
-        if lcfg.reach_revise_s <= 0:
-            return
+    def _hands_with_reach(self) -> Iterator[tuple[_Person, _Track, bool]]:
+        """Every live person's hand trackers, each with whether it is out of that person's
+        reach and within another's (:func:`lab.astray`). Safe to take labels off while
+        iterating."""
         persons, heads = self._live_heads()
         for i, p in enumerate(persons):
             others = np.delete(heads, i, axis=0)
             for hid in list(p.hand_ids):
                 h = self._tracks.get(hid)
-                if h is None:
-                    continue
-                if h.phase is not Phase.NORMAL or not lab.astray(h.mean_m, heads[i], others, lcfg):
-                    h.astray_ns = None
-                    continue
-                h.astray_ns, due = _persisted(h.astray_ns, t_ns, lcfg.reach_revise_s)
-                if not due:
-                    continue
-                log.debug(
-                    "t%d (%s) is out of p%d's reach: label taken off", h.id, h.label, p.number
-                )
-                p.hand_ids.remove(hid)
-                h.take_label_off()
+                if h is not None:
+                    yield p, h, lab.astray(h.mean_m, heads[i], others, self.cfg.labelling)
+
+    @staticmethod
+    def _unlabel_hand(p: _Person, h: _Track, why: str) -> None:
+        log.debug("t%d (%s) %s p%d's reach: label taken off", h.id, h.label, why, p.number)
+        p.hand_ids.remove(h.id)
+        h.take_label_off()
+
+    def _detach_astray(self, t_ns: int) -> None:
+        """Take the label off a hand that stayed out of its person's reach and within
+        another's for ``reach_revise_s`` (:func:`lab.astray`): it tracks someone else's hand,
+        since a pair parted the wrong way round or the tracker slid across. It goes back to
+        unlabelled and is attached anew, and its person's slot is free for the real hand."""
+        revise_s = self.cfg.labelling.reach_revise_s
+        if revise_s <= 0:
+            return
+        for p, h, astray in self._hands_with_reach():
+            if h.phase is not Phase.NORMAL or not astray:
+                h.astray_ns = None
+                continue
+            h.astray_ns, due = _persisted(h.astray_ns, t_ns, revise_s)
+            if due:
+                self._unlabel_hand(p, h, "is out of")
 
     def _unlabel_astray_joiners(self, pairs: dict[int, int]) -> None:
         """Take the label off a person's hand that is about to combine while out of its
@@ -1831,20 +1838,9 @@ class MultiTargetTracker:
         would be a handshake between one person's two trackers."""
         if not (pairs and self.cfg.labelling.astray_at_join):
             return
-        persons, heads = self._live_heads()
-        for i, p in enumerate(persons):
-            others = np.delete(heads, i, axis=0)
-            for hid in [h for h in p.hand_ids if h in pairs]:
-                h = self._tracks[hid]
-                if lab.astray(h.mean_m, heads[i], others, self.cfg.labelling):
-                    log.debug(
-                        "t%d (%s) joins out of p%d's reach: label taken off",
-                        hid,
-                        h.label,
-                        p.number,
-                    )
-                    p.hand_ids.remove(hid)
-                    h.take_label_off()
+        for p, h, astray in self._hands_with_reach():
+            if astray and h.id in pairs:
+                self._unlabel_hand(p, h, "joins out of")
 
     def _attach_hands(self, t_ns: int, returning: set[int]) -> None:
         persons, heads = self._live_heads()
