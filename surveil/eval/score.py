@@ -320,7 +320,7 @@ def _persistent_assignment(
 
 
 @dataclass(frozen=True, slots=True)
-class _Matches:
+class TargetMatches:
     """Matched (true limb, predicted row) pairs over all scored frames, in frame order."""
 
     gt_frame: np.ndarray  # (M,) index into the ground truth's frames
@@ -330,7 +330,7 @@ class _Matches:
 
 def _match_targets(
     gt: GroundTruth, run: RunData, cfg: EvalConfig
-) -> tuple[_Matches, np.ndarray, int, int, int, int]:
+) -> tuple[TargetMatches, np.ndarray, int, int, int, int]:
     """Per-frame gated Hungarian matching. Returns (matches, scored gt frames, countable,
     found, false targets, unaligned)."""
     aligned = align_frames(gt.t_ns, run.frame_t_ns, gt.fps)
@@ -374,9 +374,15 @@ def _match_targets(
     def cat(parts: list[np.ndarray]) -> np.ndarray:
         return np.concatenate(parts).astype(np.int64) if parts else np.zeros(0, np.int64)
 
-    matches = _Matches(cat(gf), cat(tj), cat(pr))
+    matches = TargetMatches(cat(gf), cat(tj), cat(pr))
     n_unaligned = int(np.count_nonzero(aligned < 0))
     return matches, np.array(scored, dtype=np.int64), n_countable, n_found, n_false, n_unaligned
+
+
+def match_targets(gt: GroundTruth, run: RunData, cfg: EvalConfig) -> TargetMatches:
+    """The (true limb, predicted row) pairs that the scores are computed over, in frame
+    order: for diagnostics that split the errors (``benchmarks/error_breakdown.py``)."""
+    return _match_targets(gt, run, cfg)[0]
 
 
 NEW_TRACKER_S = 0.5  # a tracker younger than this at a switch was started for the limb
@@ -422,7 +428,7 @@ def identity_switches(gt: GroundTruth, run: RunData, cfg: EvalConfig) -> list[Id
     return _switches(gt, run, _match_targets(gt, run, cfg)[0])
 
 
-def _switches(gt: GroundTruth, run: RunData, m: _Matches) -> list[IdentitySwitch]:
+def _switches(gt: GroundTruth, run: RunData, m: TargetMatches) -> list[IdentitySwitch]:
     """:func:`identity_switches` of a run's matches: the changes of the tracker matched to each
     true limb between consecutive matched frames (frames without a match are skipped, as in
     CLEAR MOT)."""

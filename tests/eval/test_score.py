@@ -22,6 +22,7 @@ from surveil.eval.score import (
     format_report,
     gated_assignment,
     identity_switches,
+    match_targets,
 )
 from surveil.eval.truth_mcap import truth_frames, write_truth_mcap
 from surveil.io.ground_truth import GroundTruth, load_ground_truth, write_ground_truth
@@ -316,6 +317,29 @@ def test_dropping_a_third_of_targets_lowers_recall(
     t = evaluate(rec, write_prediction(tmp_path / "d.mcap", gt, rig, drop), CFG).targets
     assert t.recall == pytest.approx(2 / 3, abs=0.03)
     assert t.head_error_mm_mean == 0.0 and t.false_targets_per_frame == 0.0
+
+
+def test_matched_targets_are_the_pairs_the_errors_are_averaged_over(
+    rec: Path, rig: Rig, gt: GroundTruth, tmp_path: Path
+) -> None:
+    """Every true limb matched to the predicted row at its own place; the hand error over
+    those pairs is the report's."""
+    rng = np.random.default_rng(3)
+
+    def noisy(i: int, tgs: list[TargetSnapshot]) -> list[TargetSnapshot]:
+        return [replace(tg, mean_m=tg.mean_m + rng.normal(0, 0.02, 3)) for tg in tgs]
+
+    mcap = write_prediction(tmp_path / "m.mcap", gt, rig, noisy)
+    run = read_run(mcap)
+    m = match_targets(gt, run, CFG)
+    report = evaluate(rec, mcap, CFG).targets
+    assert len(m.pred_row) == report.n_matches > 0
+    err = np.linalg.norm(
+        run.target_pos_m[m.pred_row] - gt.positions_m[m.gt_frame, m.true_idx], axis=1
+    )
+    assert err.max() < 0.15
+    hands = np.array(["hand" in gt.labels[j] for j in m.true_idx])
+    assert 1000 * err[hands].mean() == pytest.approx(report.hand_error_mm_mean)
 
 
 def test_lost_targets_are_not_scored(rec: Path, rig: Rig, gt: GroundTruth, tmp_path: Path) -> None:
