@@ -32,6 +32,7 @@ from surveil.pipeline import (
 from surveil.synth.scene import synthesise
 
 ROOT = Path(__file__).resolve().parents[1]
+CODECS = ("mp4v", "jpeg", "png")  # [effects] compression
 
 
 def cell(x, digits=3):
@@ -69,31 +70,33 @@ def parse_seeds(text: str) -> list[int]:
     return seeds
 
 
-def scenario_of(name: str) -> tuple[Path, int | None]:
-    """The bundled scenario file and scene seed of a scene name: ``demo`` is the bundled
-    take, ``demo@11`` the take rendered with ``[scene] seed = 11`` (held out: the settings
-    were tuned on the bundled takes).
+def scenario_of(name: str) -> tuple[Path, int | None, str | None]:
+    """The bundled scenario file, scene seed and codec of a scene name: ``demo`` is the
+    bundled take, ``demo@11`` the take rendered with ``[scene] seed = 11`` (held out: the
+    settings were tuned on the bundled takes), ``demo~png`` or ``demo@11~png`` that take
+    stored with ``[effects] compression = "png"`` (the codec held out).
 
-    >>> [(p.name, s) for p, s in map(scenario_of, ["demo", "demo@11"])]
-    [('demo.toml', None), ('demo.toml', 11)]
+    >>> [(p.name, s, c) for p, s, c in map(scenario_of, ["demo", "demo@11", "demo@11~png"])]
+    [('demo.toml', None, None), ('demo.toml', 11, None), ('demo.toml', 11, 'png')]
     """
-    base, at, seed = name.partition("@")
+    take, tilde, codec = name.partition("~")
+    base, at, seed = take.partition("@")
     path = ROOT / "recordings" / f"{base}.toml"
     if not path.is_file():
         raise SystemExit(f"no bundled scenario {base!r} (recordings/{base}.toml)")
-    if not at:
-        return path, None
-    if not seed.isdigit():
+    if tilde and codec not in CODECS:
+        raise SystemExit(f"scene {name!r}: the codec after '~' must be one of {', '.join(CODECS)}")
+    if at and not seed.isdigit():
         raise SystemExit(f"scene {name!r}: the scene seed after '@' must be a number >= 0")
-    return path, int(seed)
+    return path, int(seed) if at else None, codec if tilde else None
 
 
 def render(name: str, out_dir: Path) -> Path:
     """Render scene ``name`` (:func:`scenario_of`) into ``out_dir / name`` unless it is
     there and up to date; returns that recording directory."""
     rec_dir = out_dir / name
-    scenario, scene_seed = scenario_of(name)
-    synthesise(scenario, rec_dir, scene_seed=scene_seed)
+    scenario, scene_seed, codec = scenario_of(name)
+    synthesise(scenario, rec_dir, scene_seed=scene_seed, compression=codec)
     return rec_dir
 
 
@@ -127,17 +130,26 @@ def bench(
 
 
 def add_scene_arguments(parser: argparse.ArgumentParser) -> None:
-    """Scene names (``NAME`` or ``NAME@SCENE_SEED``) and ``--scene-seeds``."""
+    """Scene names (``NAME``, ``NAME@SCENE_SEED``, ``NAME~CODEC``), ``--scene-seeds`` and
+    ``--codec``."""
     parser.add_argument(
         "names",
         nargs="*",
-        help="bundled scenes (default: all); NAME@N is the take with scene seed N",
+        help="bundled scenes (default: all); NAME@N is the take with scene seed N, NAME~CODEC "
+        "(NAME@N~CODEC) that take stored with another [effects] compression",
     )
     parser.add_argument(
         "--scene-seeds",
         default=None,
         help="held-out takes instead of the bundled ones: every scene rendered with each of "
         "these scene seeds (e.g. 101-102), named NAME@N",
+    )
+    parser.add_argument(
+        "--codec",
+        choices=CODECS,
+        default=None,
+        help="every scene stored with this [effects] compression instead of its own, named "
+        "NAME~CODEC (the same pixels before encoding)",
     )
 
 
@@ -155,9 +167,11 @@ def scene_names(args: argparse.Namespace) -> list[str]:
     """The scenes named, or every bundled recording; with ``--scene-seeds``, each of them
     as every take named there."""
     names = args.names or sorted(p.stem for p in (ROOT / "recordings").glob("*.toml"))
-    if getattr(args, "scene_seeds", None) is None:
-        return names
-    return [f"{n}@{s}" for n in names for s in parse_seeds(args.scene_seeds)]
+    if getattr(args, "scene_seeds", None) is not None:
+        names = [f"{n}@{s}" for n in names for s in parse_seeds(args.scene_seeds)]
+    if getattr(args, "codec", None) is not None:
+        names = [f"{n}~{args.codec}" for n in names]
+    return names
 
 
 def run_of(name: str, args: argparse.Namespace) -> Path:

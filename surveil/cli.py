@@ -89,6 +89,7 @@ def cmd_synth(args: argparse.Namespace) -> ExitCode:
         overwrite=args.force,
         on_progress=progress_bar(f"synth {args.scenario.stem}", args.quiet),
         scene_seed=args.seed,
+        compression=args.compression,
     )
     elapsed = time.perf_counter() - t0
     print(summary.describe())
@@ -410,6 +411,12 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="replace the scenario's [scene] seed: another take of the same script (its own "
         "timing variations, calibration error, noise, dropped frames)",
+    )
+    p.add_argument(
+        "--compression",
+        choices=("mp4v", "jpeg", "png"),
+        default=None,
+        help="replace the scenario's [effects] compression: the same take stored another way",
     )
     p.set_defaults(command=cmd_synth)
 

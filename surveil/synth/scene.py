@@ -35,7 +35,7 @@ from surveil.io.video_writer import FrameWriter, write_image
 from surveil.synth.actors import Ellipsoid, Part, body_primitives
 from surveil.synth.preview import contact_sheet
 from surveil.synth.render import CameraRenderer
-from surveil.synth.scenario import Scenario, load_scenario, person_ids
+from surveil.synth.scenario import EffectsSpec, Scenario, load_scenario, person_ids
 from surveil.synth.timeline import SIDES, Choreography, compile_scenario
 
 log = logging.getLogger(__name__)
@@ -161,12 +161,15 @@ def synthesise(
     overwrite: bool = False,
     on_progress: Callable[[int, int], None] | None = None,
     scene_seed: int | None = None,
+    compression: str | None = None,
 ) -> SynthSummary:
     """Render ``scenario_path`` into the recording directory ``out_dir``.
 
     ``scene_seed`` replaces the scenario's ``[scene] seed``: another take of the same
     script, with its own timing and motion variations, calibration error, noise and dropped
     frames (held-out recordings for a benchmark tuned on the bundled takes).
+    ``compression`` replaces ``[effects] compression``: the same take, pixel for pixel
+    before encoding, stored another way (the codec as a held-out condition).
 
     Raises ConfigError for a bad scenario or a negative ``scene_seed``, InputError if
     ``out_dir`` holds something else and ``overwrite`` is false.
@@ -182,6 +185,16 @@ def synthesise(
             scenario, scene=dataclasses.replace(scenario.scene, seed=scene_seed)
         )
         take = f" scene seed {scene_seed}".encode()
+    if compression is not None:
+        allowed = EffectsSpec.__dataclass_fields__["compression"].metadata["choices"]
+        if compression not in allowed:
+            raise ConfigError(
+                f"compression must be one of {', '.join(allowed)}, got {compression!r}"
+            )
+        scenario = dataclasses.replace(
+            scenario, effects=dataclasses.replace(scenario.effects, compression=compression)
+        )
+        take += f" compression {compression}".encode()
     digest = hashlib.sha256(
         scenario_path.read_bytes() + take + f"v{GENERATOR_VERSION}".encode()
     ).hexdigest()
