@@ -191,9 +191,7 @@ def test_another_scene_seed_is_another_take_of_the_same_script(
     assert load_ground_truth(out).meta["seed"] == bundled.meta["seed"]
 
 
-def test_another_codec_stores_the_same_take_another_way(
-    small_scenario, small_recording, tmp_path
-):
+def test_another_codec_stores_the_same_take_another_way(small_scenario, small_recording, tmp_path):
     """`surveil synth --compression png`: the bundled take's frames, pixel for pixel before
     encoding, as lossless PNG folders (the codec as a held-out condition); not reused for
     the bundled take's codec."""
