@@ -29,10 +29,10 @@ from surveil.pipeline import (
     run_recording,
     use_one_opencv_thread,
 )
+from surveil.synth.scenario import COMPRESSIONS
 from surveil.synth.scene import synthesise
 
 ROOT = Path(__file__).resolve().parents[1]
-CODECS = ("mp4v", "jpeg", "png")  # [effects] compression
 
 
 def cell(x, digits=3):
@@ -84,8 +84,10 @@ def scenario_of(name: str) -> tuple[Path, int | None, str | None]:
     path = ROOT / "recordings" / f"{base}.toml"
     if not path.is_file():
         raise SystemExit(f"no bundled scenario {base!r} (recordings/{base}.toml)")
-    if tilde and codec not in CODECS:
-        raise SystemExit(f"scene {name!r}: the codec after '~' must be one of {', '.join(CODECS)}")
+    if tilde and codec not in COMPRESSIONS:
+        raise SystemExit(
+            f"scene {name!r}: the codec after '~' must be one of {', '.join(COMPRESSIONS)}"
+        )
     if at and not seed.isdigit():
         raise SystemExit(f"scene {name!r}: the scene seed after '@' must be a number >= 0")
     return path, int(seed) if at else None, codec if tilde else None
@@ -146,7 +148,7 @@ def add_scene_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--codec",
-        choices=CODECS,
+        choices=COMPRESSIONS,
         default=None,
         help="every scene stored with this [effects] compression instead of its own, named "
         "NAME~CODEC (the same pixels before encoding)",
@@ -165,7 +167,7 @@ def add_run_arguments(parser: argparse.ArgumentParser) -> None:
 
 def scene_names(args: argparse.Namespace) -> list[str]:
     """The scenes named, or every bundled recording; with ``--scene-seeds``, each of them
-    as every take named there."""
+    as every take named there; with ``--codec``, each stored with that codec."""
     names = args.names or sorted(p.stem for p in (ROOT / "recordings").glob("*.toml"))
     if getattr(args, "scene_seeds", None) is not None:
         names = [f"{n}@{s}" for n in names for s in parse_seeds(args.scene_seeds)]

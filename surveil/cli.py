@@ -348,6 +348,8 @@ def cmd_review(args: argparse.Namespace) -> ExitCode:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from surveil.synth.scenario import COMPRESSIONS  # light: numpy and the config schema
+
     parser = argparse.ArgumentParser(
         prog="surveil",
         description="Multi-camera 3D tracking of heads and hands, carried objects and "
@@ -414,7 +416,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--compression",
-        choices=("mp4v", "jpeg", "png"),
+        choices=COMPRESSIONS,
         default=None,
         help="replace the scenario's [effects] compression: the same take stored another way",
     )

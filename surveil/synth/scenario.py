@@ -176,6 +176,9 @@ class ActionSpec:
     gap_m: float = setting(0.25, "approach: distance the hands stop apart", min=0.12)
 
 
+COMPRESSIONS = ("mp4v", "jpeg", "png")  # how a recording's frames are stored
+
+
 @dataclass(frozen=True, kw_only=True)
 class EffectsSpec:
     """Camera and recording imperfections (all on by default: good scores must mean something)."""
@@ -183,7 +186,7 @@ class EffectsSpec:
     noise_sigma: float = setting(2.5, "sensor read noise, grey levels", min=0, max=30)
     shot_noise: float = setting(0.6, "photon noise scale (sigma^2 += k * I)", min=0, max=5)
     compression: str = setting(
-        "mp4v", "mp4v video, jpeg or png image folders", choices=("mp4v", "jpeg", "png")
+        "mp4v", "mp4v video, jpeg or png image folders", choices=COMPRESSIONS
     )
     jpeg_quality: int = setting(85, "for jpeg", min=10, max=100)
     gain_spread: float = setting(0.08, "per-camera gain sigma (relative)", min=0, max=0.5)

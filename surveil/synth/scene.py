@@ -35,7 +35,7 @@ from surveil.io.video_writer import FrameWriter, write_image
 from surveil.synth.actors import Ellipsoid, Part, body_primitives
 from surveil.synth.preview import contact_sheet
 from surveil.synth.render import CameraRenderer
-from surveil.synth.scenario import EffectsSpec, Scenario, load_scenario, person_ids
+from surveil.synth.scenario import COMPRESSIONS, Scenario, load_scenario, person_ids
 from surveil.synth.timeline import SIDES, Choreography, compile_scenario
 
 log = logging.getLogger(__name__)
@@ -186,10 +186,9 @@ def synthesise(
         )
         take = f" scene seed {scene_seed}".encode()
     if compression is not None:
-        allowed = EffectsSpec.__dataclass_fields__["compression"].metadata["choices"]
-        if compression not in allowed:
+        if compression not in COMPRESSIONS:
             raise ConfigError(
-                f"compression must be one of {', '.join(allowed)}, got {compression!r}"
+                f"compression must be one of {', '.join(COMPRESSIONS)}, got {compression!r}"
             )
         scenario = dataclasses.replace(
             scenario, effects=dataclasses.replace(scenario.effects, compression=compression)
