@@ -185,7 +185,7 @@ def synthesise(
             scenario, scene=dataclasses.replace(scenario.scene, seed=scene_seed)
         )
         take = f" scene seed {scene_seed}".encode()
-    if compression is not None:
+    if compression is not None and compression != scenario.effects.compression:
         if compression not in COMPRESSIONS:
             raise ConfigError(
                 f"compression must be one of {', '.join(COMPRESSIONS)}, got {compression!r}"

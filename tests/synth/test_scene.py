@@ -207,6 +207,9 @@ def test_another_codec_stores_the_same_take_another_way(small_scenario, small_re
     assert np.abs(first_png.astype(int) - first.astype(int)).mean() < 6
     assert synthesise(small_scenario, out, compression="png").reused
     assert not synthesise(small_scenario, out, compression="jpeg", overwrite=True).reused
+    # naming the scenario's own codec is the bundled take, already rendered
+    own = load_scenario(small_scenario).effects.compression
+    assert synthesise(small_scenario, small_recording, compression=own).reused
 
 
 def test_an_unknown_codec_is_refused(small_scenario, tmp_path):
