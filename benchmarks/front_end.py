@@ -1,5 +1,5 @@
-"""The per-camera stage of a run (``surveil.pipeline.observe_camera``: background, skin,
-blobs, crowns) as the benchmarks replay it."""
+"""The per-camera stage of a run (``surveil.pipeline.observe_cameras``: background, skin,
+crowns, blobs) as the benchmarks replay it."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from surveil.blobs.extract import SceneryMask
 from surveil.datatypes import CameraObservation, FrameSet
 from surveil.io.recording import Recording
 from surveil.io.skin_model import load_camera_skin_models
-from surveil.pipeline import CAMERA_STEPS, PipelineConfig, new_background, observe_camera
+from surveil.pipeline import CAMERA_STEPS, PipelineConfig, new_background, observe_cameras
 
 
 def observe_recording(
@@ -25,8 +25,9 @@ def observe_recording(
     each camera spent in ``background``, ``skin``, ``blobs`` and ``crowns``.
 
     Background models start on the run's clock as in ``surveil run``
-    (:func:`learning_frames_after`); blobs are chosen for ``n_people`` (default: the number
-    of silhouettes, where a run uses its tracked heads); each camera's skin model is the one
+    (:func:`learning_frames_after`); blobs are chosen for ``n_people`` (default: the view's
+    silhouettes or the frame set's crowns, whichever count more, where a run also counts its
+    tracked heads); each camera's skin model is the one
     a run uses: saved beside the rig (``surveil train-skin``), else the default. As in a run,
     the silhouettes' distances are exact only up to the run's cap (beyond it nothing changes
     the candidates). ``skin_near_people``: skin is classified only in the boxes around the
@@ -39,25 +40,23 @@ def observe_recording(
     models: dict[str, BackgroundModel] = {}
     scenery = {cam: SceneryMask(model) for cam, model in skin_models.items()}
     for fs in rec.framesets(stop=max_frames):
-        observations: dict[str, CameraObservation] = {}
-        times: dict[str, list[float]] = {step: [] for step in CAMERA_STEPS}
-        for cam in rec.camera_names:
-            img = fs.images.get(cam)
-            if img is None:
-                continue
+        images = {cam: fs.images[cam] for cam in rec.camera_names if cam in fs.images}
+        for cam, img in images.items():
             if cam not in models:
                 models[cam] = new_background(cfg, rec.rig, cam, img.shape[:2], fs.index)
-            observations[cam], seconds = observe_camera(
-                cfg,
-                rec.rig[cam],
-                img,
-                models[cam],
-                skin_models[cam],
-                scenery[cam],
-                n_people,
-                changed=changed,
-                skin_everywhere=not skin_near_people,
-            )
-            for step, sec in seconds.items():
+        observations, seconds = observe_cameras(
+            cfg,
+            rec.rig,
+            images,
+            models,
+            skin_models,
+            scenery,
+            n_people,
+            changed=changed,
+            skin_everywhere=not skin_near_people,
+        )
+        times: dict[str, list[float]] = {step: [] for step in CAMERA_STEPS}
+        for cam_seconds in seconds.values():
+            for step, sec in cam_seconds.items():
                 times[step].append(sec)
         yield fs, observations, times

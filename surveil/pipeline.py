@@ -45,7 +45,7 @@ from surveil.datatypes import (
 )
 from surveil.io.recording import Recording
 from surveil.recon.candidates import make_candidates
-from surveil.recon.crowns import silhouette_crowns
+from surveil.recon.crowns import people_from_crowns, silhouette_crowns
 from surveil.recon.settings import CandidateConfig
 from surveil.tracking import MultiTargetTracker, TrackingConfig
 
@@ -162,47 +162,65 @@ def new_background(
     )
 
 
-def observe_camera(
+def observe_cameras(
     cfg: PipelineConfig,
-    camera: Camera,
-    img: np.ndarray,
-    background: BackgroundModel,
-    skin_model: SkinModel,
-    scenery: SceneryMask,
+    rig: Rig,
+    images: Mapping[str, np.ndarray],
+    backgrounds: Mapping[str, BackgroundModel],
+    skin_models: Mapping[str, SkinModel],
+    scenery: Mapping[str, SceneryMask],
     n_people: int | None,
     *,
     at_least_people: int = 1,
-    people_px: np.ndarray | None = None,
+    people_px: Mapping[str, np.ndarray] | None = None,
     changed: bool = False,
     skin_everywhere: bool = False,
-) -> tuple[CameraObservation, dict[str, float]]:
-    """One camera's frame through the per-camera stage (sections 6.1-6.2 and the crowns):
-    its observation and the seconds spent in each of ``CAMERA_STEPS``.
+) -> tuple[dict[str, CameraObservation], dict[str, dict[str, float]]]:
+    """A frame set's images through the per-camera stage (sections 6.1-6.2 and the crowns):
+    every camera's observation and the seconds it spent in each of ``CAMERA_STEPS``, both by
+    camera name, in the order of ``images``.
 
-    ``n_people``: the number of people the blobs are chosen for (None: as many as the
-    silhouettes, at least ``at_least_people``, a run's tracked heads). ``people_px``: where
-    tracked people project (the background does not learn them). ``changed``: the
-    silhouettes carry MOG2's changed mask even when ``cfg`` does not ask for it.
+    ``n_people``: the number of people the blobs are chosen for (None: as many as the view's
+    silhouettes, the frame set's crowns (``BlobConfig.people_from_crowns``) and
+    ``at_least_people``, a run's tracked heads, whichever is most). ``people_px``: where
+    tracked people project in each view (the background does not learn them). ``changed``:
+    the silhouettes carry MOG2's changed mask even when ``cfg`` does not ask for it.
     ``skin_everywhere``: classify skin in the whole frame, not only in the boxes around the
     silhouettes as a run does (for diagnostics that look at skin far from people).
     """
     requests = cfg.background_requests()
     requests["changed"] |= changed
-    t0 = time.perf_counter()
-    silhouettes = background.step(img, **requests, people_px=people_px)
-    t1 = time.perf_counter()
-    boxes = None if skin_everywhere else silhouettes.boxes(blob_margin_px(cfg.blobs, img.shape[1]))
-    skin = skin_model.classify(img, boxes)
-    t2 = time.perf_counter()
-    people = n_people or max(silhouettes.n, at_least_people)
-    on_scenery = scenery.mask(background) if cfg.blobs.scenery_share > 0 else None
-    blobs = extract_blobs(skin, silhouettes, cfg.blobs, people, img, on_scenery)
-    t3 = time.perf_counter()
     crowns_cfg = cfg.candidates.crowns
-    crowns = silhouette_crowns(silhouettes, camera, crowns_cfg) if crowns_cfg.enabled else None
-    t4 = time.perf_counter()
-    seconds = dict(zip(CAMERA_STEPS, (t1 - t0, t2 - t1, t3 - t2, t4 - t3), strict=True))
-    return CameraObservation(camera.name, silhouettes, skin, blobs, crowns), seconds
+    find_crowns = crowns_cfg.enabled or cfg.blobs.people_from_crowns
+    seconds: dict[str, dict[str, float]] = {}
+    sensed = {}
+    # first every view's silhouettes, skin and crowns: the views' crowns count the people
+    # that each view's blobs are chosen for
+    for cam, img in images.items():
+        t0 = time.perf_counter()
+        silhouettes = backgrounds[cam].step(
+            img, **requests, people_px=None if people_px is None else people_px.get(cam)
+        )
+        t1 = time.perf_counter()
+        margin = blob_margin_px(cfg.blobs, img.shape[1])
+        skin = skin_models[cam].classify(img, None if skin_everywhere else silhouettes.boxes(margin))
+        t2 = time.perf_counter()
+        crowns = silhouette_crowns(silhouettes, rig[cam], crowns_cfg) if find_crowns else None
+        t3 = time.perf_counter()
+        sensed[cam] = silhouettes, skin, crowns
+        seconds[cam] = {"background": t1 - t0, "skin": t2 - t1, "crowns": t3 - t2}
+    crowd = 0
+    if cfg.blobs.people_from_crowns:
+        crowd = people_from_crowns([len(crowns) for _, _, crowns in sensed.values()])
+    observations = {}
+    for cam, (silhouettes, skin, crowns) in sensed.items():
+        t0 = time.perf_counter()
+        people = n_people or max(silhouettes.n, crowd, at_least_people)
+        on_scenery = scenery[cam].mask(backgrounds[cam]) if cfg.blobs.scenery_share > 0 else None
+        blobs = extract_blobs(skin, silhouettes, cfg.blobs, people, images[cam], on_scenery)
+        seconds[cam]["blobs"] = time.perf_counter() - t0
+        observations[cam] = CameraObservation(cam, silhouettes, skin, blobs, crowns)
+    return observations, seconds
 
 
 class Pipeline:
@@ -286,29 +304,25 @@ class Pipeline:
         return px[depth > 0]
 
     def _observe(self, fs: FrameSet, timings: dict[str, float]) -> dict[str, CameraObservation]:
-        observations = {}
-        n_people = self.cfg.people_hint or None
-        for cam in self.rig.names:
-            img = fs.images.get(cam)
-            if img is None:
-                continue
-            bg = self.backgrounds.get(cam)
-            if bg is None:
-                bg = self.backgrounds[cam] = new_background(
+        images = {cam: fs.images[cam] for cam in self.rig.names if cam in fs.images}
+        for cam, img in images.items():
+            if cam not in self.backgrounds:
+                self.backgrounds[cam] = new_background(
                     self.cfg, self.rig, cam, img.shape[:2], self._n_framesets
                 )
-            observations[cam], seconds = observe_camera(
-                self.cfg,
-                self.rig[cam],
-                img,
-                bg,
-                self.skin_models[cam],
-                self.scenery[cam],
-                n_people,
-                at_least_people=max(self._n_heads, 1),
-                people_px=self._people_px(cam),
-            )
-            for step, sec in seconds.items():
+        observations, seconds = observe_cameras(
+            self.cfg,
+            self.rig,
+            images,
+            self.backgrounds,
+            self.skin_models,
+            self.scenery,
+            self.cfg.people_hint or None,
+            at_least_people=max(self._n_heads, 1),
+            people_px={cam: self._people_px(cam) for cam in images},
+        )
+        for cam_seconds in seconds.values():
+            for step, sec in cam_seconds.items():
                 timings[step] += 1000 * sec
         return observations
 

@@ -14,14 +14,20 @@ from surveil.eval.score import EvalConfig, evaluate
 from surveil.io.mcap_reader import read_run
 from surveil.io.mcap_writer import McapSink, McapWriter
 from surveil.io.recording import open_recording
+from surveil.blobs.extract import SceneryMask
+from surveil.blobs.settings import BlobConfig
+from surveil.blobs.skin import SkinModel
+from surveil.datatypes import Silhouettes
 from surveil.pipeline import (
     OPENCV_THREADS_ENV,
     Pipeline,
     PipelineConfig,
     load_pipeline_config,
+    observe_cameras,
     run_recording,
     use_one_opencv_thread,
 )
+from surveil.rigs import make_corner_rig
 from surveil.recon.settings import CandidateConfig
 from surveil.tracking import LabellingConfig, TrackingConfig
 
@@ -252,3 +258,48 @@ def test_arm_trackers_feed_the_hands_no_two_views_see(small_recording):
     # near a hand, not anywhere: 0.17 m median on this 320x240 recording, 0.08-0.10 m on the
     # 640x480 scenes (docs/benchmarks.md); a pose far off its hand would be metres away
     assert np.median(errors) < 0.25, np.round(errors, 2)
+
+
+class _OneSilhouette:
+    """A background model whose every frame shows one silhouette: two people merged."""
+
+    def step(self, img, **_):
+        labels = np.zeros(img.shape[:2], np.int32)
+        labels[100:400, 200:440] = 1
+        return Silhouettes(
+            labels, np.array([100.0]), np.array([399.0]), np.zeros(img.shape[:2], np.float32)
+        )
+
+
+@pytest.mark.parametrize(("from_crowns", "hint", "kept"), [(True, 0, 6), (False, 0, 5), (False, 2, 6)])
+def test_a_view_where_people_merged_keeps_blobs_for_as_many_as_the_crowns_count(
+    monkeypatch, from_crowns, hint, kept
+):
+    # two faces and four hands, all skin (white), in one silhouette of every view; each view's
+    # crowns show two heads. N_h = 1 keeps ceil(1.5 * 3 * 1) = 5 blobs, N_h = 2 keeps 9.
+    monkeypatch.setattr("surveil.pipeline.silhouette_crowns", lambda *_: np.zeros((2, 2)))
+    rig = make_corner_rig(3, room_m=(6.0, 4.0), height_m=2.8, size=(640, 480), hfov_deg=80)
+    img = np.zeros((480, 640, 3), np.uint8)
+    for k, side in enumerate((20, 18, 16, 14, 12, 10)):
+        img[150 : 150 + side, 210 + 36 * k : 210 + 36 * k + side] = 255
+    lut = np.zeros((32, 32, 32), bool)
+    lut[31, 31, 31] = True
+    skin = SkinModel(lut, 5)
+    cfg = PipelineConfig(
+        people_hint=hint,
+        blobs=dataclasses.replace(BlobConfig(), people_from_crowns=from_crowns, scenery_share=0.0),
+    )
+    observations, seconds = observe_cameras(
+        cfg,
+        rig,
+        {cam.name: img for cam in rig},
+        {cam.name: _OneSilhouette() for cam in rig},
+        {cam.name: skin for cam in rig},
+        {cam.name: SceneryMask(skin) for cam in rig},
+        cfg.people_hint or None,
+    )
+    assert list(observations) == [cam.name for cam in rig]
+    for obs in observations.values():
+        assert obs.silhouettes.n == 1
+        assert len(obs.blobs.areas_px) == kept
+    assert all(set(s) == {"background", "skin", "crowns", "blobs"} for s in seconds.values())

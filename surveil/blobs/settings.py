@@ -174,6 +174,14 @@ class BlobConfig:
         min=0.0,
     )
     blob_excess: float = setting(1.5, "lambda: keep ceil(lambda * 3 * N_h) largest", min=1.0)
+    people_from_crowns: bool = setting(
+        False,
+        "N_h also counts the people the silhouettes' crowns show: the median over the frame "
+        "set's views of each view's crowns ([candidates.crowns] finds them), which people "
+        "standing close keep where their silhouettes merge (false = each view's silhouettes "
+        "and a run's tracked heads only; off: it costs three_people events in a run; "
+        "docs/blobs.md, 'How many people')",
+    )
     silhouette_dilate_px: int = setting(3, "grow silhouettes by this radius, px", min=0)
     change_dilate_px: int = setting(
         -1,

@@ -23,7 +23,7 @@ Pure functions, vectorised over views and pairs; the loops run over silhouettes 
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from scipy.signal import find_peaks, peak_prominences, peak_widths
@@ -44,6 +44,27 @@ COLUMN_STEP = 2
 # a crown lies in this upper share of its silhouette's box (a seated person's head beside a
 # standing one's lies 30 % down); the edge is not read below it
 TOP_SHARE = 0.6
+
+
+def people_from_crowns(crowns_per_view: Sequence[int]) -> int:
+    """How many people a frame set's views show by their crowns: the median of the views'
+    crown counts, rounded down (0 without views).
+
+    A view's silhouettes undercount people who stand close (they merge into one silhouette);
+    its crowns do not, as long as each head rises above the others' shoulders. A view where
+    a raised hand or a bag also makes a crown, or where one person hides behind another, is
+    outvoted by the other views (docs/blobs.md, "How many people").
+
+    >>> people_from_crowns([3, 2, 3, 4])
+    3
+    >>> people_from_crowns([1, 2])
+    1
+    >>> people_from_crowns([])
+    0
+    """
+    if len(crowns_per_view) == 0:
+        return 0
+    return int(np.floor(np.median(np.asarray(crowns_per_view, dtype=np.float64))))
 
 
 def _px_per_m(

@@ -14,7 +14,12 @@ from surveil.config import from_table
 from surveil.datatypes import BlobSet, CameraObservation, Silhouettes
 from surveil.errors import ConfigError
 from surveil.recon.candidates import make_candidates
-from surveil.recon.crowns import centre_lines, crown_heads, silhouette_crowns
+from surveil.recon.crowns import (
+    centre_lines,
+    crown_heads,
+    people_from_crowns,
+    silhouette_crowns,
+)
 from surveil.recon.settings import CandidateConfig, CrownConfig
 from surveil.rigs import make_corner_rig
 
@@ -119,6 +124,18 @@ def test_four_views_of_two_people_give_their_head_centres():
     err = np.linalg.norm(points[:, None] - np.array(heads)[None], axis=2).min(axis=0)
     assert (err < 0.03).all()
     assert (n_views >= 3).all() and (gap <= CFG.max_gap_m).all()
+
+
+def test_three_people_close_together_count_three_where_their_silhouettes_merge():
+    rig = _rig()
+    heads = [np.array([2.2, 2.0, 1.62]), np.array([3.0, 2.0, 1.75]), np.array([3.8, 2.0, 1.85])]
+    views = {m: _silhouettes(cam, heads) for m, cam in enumerate(rig)}
+    crowns = [len(silhouette_crowns(views[m], rig.cameras[m], CFG)) for m in views]
+    assert max(sil.n for sil in views.values()) == 1  # one silhouette in every view
+    assert people_from_crowns(crowns) == 3
+    # one view's stray crown (a raised fist) or hidden head is outvoted
+    assert people_from_crowns([*crowns[:3], crowns[3] + 1]) == 3
+    assert people_from_crowns([*crowns[:3], 2]) == 3
 
 
 @pytest.mark.parametrize(("hidden", "found"), [(1, True), (2, False)])
