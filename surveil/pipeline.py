@@ -30,7 +30,7 @@ from surveil.blobs.background import BackgroundModel, learning_frames_after, sha
 from surveil.blobs.extract import SceneryMask, blob_margin_px, extract_blobs
 from surveil.blobs.settings import BackgroundConfig, BlobConfig
 from surveil.blobs.skin import SkinModel, default_skin_model
-from surveil.camera import Camera, Rig
+from surveil.camera import Rig
 from surveil.carry import CarryAnalyser, CarryConfig
 from surveil.config import from_table, read_toml, setting
 from surveil.datatypes import (
@@ -203,7 +203,9 @@ def observe_cameras(
         )
         t1 = time.perf_counter()
         margin = blob_margin_px(cfg.blobs, img.shape[1])
-        skin = skin_models[cam].classify(img, None if skin_everywhere else silhouettes.boxes(margin))
+        skin = skin_models[cam].classify(
+            img, None if skin_everywhere else silhouettes.boxes(margin)
+        )
         t2 = time.perf_counter()
         crowns = silhouette_crowns(silhouettes, rig[cam], crowns_cfg) if find_crowns else None
         t3 = time.perf_counter()

@@ -9,15 +9,15 @@ import numpy as np
 import pytest
 
 from surveil.activity import load_rules
+from surveil.blobs.extract import SceneryMask
+from surveil.blobs.settings import BlobConfig
+from surveil.blobs.skin import SkinModel
+from surveil.datatypes import Silhouettes
 from surveil.errors import ConfigError
 from surveil.eval.score import EvalConfig, evaluate
 from surveil.io.mcap_reader import read_run
 from surveil.io.mcap_writer import McapSink, McapWriter
 from surveil.io.recording import open_recording
-from surveil.blobs.extract import SceneryMask
-from surveil.blobs.settings import BlobConfig
-from surveil.blobs.skin import SkinModel
-from surveil.datatypes import Silhouettes
 from surveil.pipeline import (
     OPENCV_THREADS_ENV,
     Pipeline,
@@ -27,8 +27,8 @@ from surveil.pipeline import (
     run_recording,
     use_one_opencv_thread,
 )
-from surveil.rigs import make_corner_rig
 from surveil.recon.settings import CandidateConfig
+from surveil.rigs import make_corner_rig
 from surveil.tracking import LabellingConfig, TrackingConfig
 
 
@@ -271,7 +271,9 @@ class _OneSilhouette:
         )
 
 
-@pytest.mark.parametrize(("from_crowns", "hint", "kept"), [(True, 0, 6), (False, 0, 5), (False, 2, 6)])
+@pytest.mark.parametrize(
+    ("from_crowns", "hint", "kept"), [(True, 0, 6), (False, 0, 5), (False, 2, 6)]
+)
 def test_a_view_where_people_merged_keeps_blobs_for_as_many_as_the_crowns_count(
     monkeypatch, from_crowns, hint, kept
 ):
