@@ -26,8 +26,8 @@ def observe_recording(
 
     Background models start on the run's clock as in ``surveil run``
     (:func:`learning_frames_after`); blobs are chosen for ``n_people`` (default: the view's
-    silhouettes or the frame set's crowns, whichever count more, where a run also counts its
-    tracked heads); each camera's skin model is the one
+    silhouettes, with ``[blobs] people_from_crowns`` also the frame set's crowns, where a run
+    also counts its tracked heads); each camera's skin model is the one
     a run uses: saved beside the rig (``surveil train-skin``), else the default. As in a run,
     the silhouettes' distances are exact only up to the run's cap (beyond it nothing changes
     the candidates). ``skin_near_people``: skin is classified only in the boxes around the
