@@ -17,8 +17,8 @@ heads):
 
 Per class, candidates per frame set and the share supported by 2, 3 and 4 views (a view
 supports a candidate when a blob centroid lies within ``[candidates] support_radius_px`` of
-its projection inside the image, as explaining away counts it). The true candidates (within
-100 mm of a limb) are the last column for comparison.
+its projection inside the image, or made it: ``view_support``, as explaining away counts).
+The true candidates (within 100 mm of a limb) are the last column for comparison.
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ from pipeline_bench import ROOT, add_scene_arguments, render, scene_names
 from surveil.io.ground_truth import load_ground_truth
 from surveil.io.recording import open_recording
 from surveil.pipeline import load_pipeline_config
-from surveil.recon.candidates import make_candidates
+from surveil.recon.candidates import make_candidates, view_support
 
 MATCH_M = 0.10
 LIMB_SEGMENT_M = 0.06
@@ -84,19 +84,6 @@ def classify(points_m: np.ndarray, limbs_m: np.ndarray, heads_m: np.ndarray, arm
     return out
 
 
-def support_views(points_m: np.ndarray, rig, obs: dict, radius_px: float) -> np.ndarray:
-    """(K,) how many cameras have a blob centroid within ``radius_px`` of the projection."""
-    n = np.zeros(len(points_m), dtype=np.int64)
-    for cam, o in obs.items():
-        if not len(points_m) or not len(o.blobs.centroids_px):
-            continue
-        px, depth = rig[cam].project(points_m)
-        inside = rig[cam].in_image(px, depth)
-        dist = np.linalg.norm(px[:, None] - o.blobs.centroids_px[None], axis=2).min(axis=1)
-        n += inside & (dist <= radius_px)
-    return n
-
-
 def measure(rec_dir: Path, cfg, max_frames: int | None) -> tuple[int, dict]:
     """Frame sets counted and, per class, the support-view count of every candidate."""
     rec, gt = open_recording(rec_dir), load_ground_truth(rec_dir)
@@ -125,7 +112,16 @@ def measure(rec_dir: Path, cfg, max_frames: int | None) -> tuple[int, dict]:
                 if np.isfinite(elbow).all() and np.isfinite(end).all():
                     arms[name].append((elbow, end))
         kinds = classify(cands.points_m, limbs, head_m, arms)
-        views = support_views(cands.points_m, rec.rig, obs, cfg.candidates.support_radius_px)
+        by_cam = {rec.rig.names.index(cam): o for cam, o in obs.items()}
+        support = view_support(
+            cands.points_m,
+            cands.cam_pairs,
+            cands.blob_pairs,
+            rec.rig,
+            by_cam,
+            cfg.candidates.support_radius_px,
+        )
+        views = (support >= 0).sum(axis=1)
         for kind, v in zip(kinds, views.tolist(), strict=True):
             found[kind].append(v)
     return n_sets, found
