@@ -175,6 +175,9 @@ class CandidateSet:
         (``surveil.recon.candidates.rescue_expected``); explaining away dropped it
     head_only : (K,) bool, optional -- evidence of a head only (the silhouettes' crowns,
         ``surveil.recon.crowns``): the tracker lets no hand's tracker take it
+    views : (K,) int, optional -- how many cameras support the point (a blob within
+        ``support_radius_px`` of its projection, its own two included;
+        ``surveil.recon.candidates.view_support``; None when explaining away is off)
     """
 
     points_m: np.ndarray
@@ -184,6 +187,7 @@ class CandidateSet:
     blob_pairs: np.ndarray | None = None
     rescued: np.ndarray | None = None
     head_only: np.ndarray | None = None
+    views: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         k = len(self.points_m)
@@ -196,6 +200,7 @@ class CandidateSet:
             ("blob_pairs", (k, 2), np.integer),
             ("rescued", (k,), np.bool_),
             ("head_only", (k,), np.bool_),
+            ("views", (k,), np.integer),
         ):
             value = getattr(self, name)
             if value is not None:

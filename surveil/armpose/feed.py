@@ -79,7 +79,7 @@ def with_arm_hands(
 ) -> CandidateSet:
     """``candidates`` followed by :func:`arm_hand_points` with prior ``cfg.feed_prior``;
     their ``cam_pairs`` and ``blob_pairs`` rows are -1, ``half_gap_m`` NaN (no camera
-    pair made them), ``rescued`` and ``head_only`` false."""
+    pair made them), ``rescued`` and ``head_only`` false, ``views`` 1."""
     extra = arm_hand_points(candidates, poses, observations, rig, cfg, support_radius_px)
     if not len(extra):
         return candidates
@@ -98,4 +98,5 @@ def with_arm_hands(
         blob_pairs=rows(candidates.blob_pairs, -1),
         rescued=rows(candidates.rescued, False),
         head_only=rows(candidates.head_only, False),
+        views=rows(candidates.views, 1),  # one view's arm model
     )

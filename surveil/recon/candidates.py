@@ -30,6 +30,7 @@ def _empty() -> CandidateSet:
         cam_pairs=np.zeros((0, 2), dtype=np.int64),
         blob_pairs=np.zeros((0, 2), dtype=np.int64),
         head_only=np.zeros(0, dtype=bool),
+        views=np.zeros(0, dtype=np.int64),
     )
 
 
@@ -464,6 +465,8 @@ def with_crowns(
         blob_pairs=column(skin.blob_pairs, -1, np.full((k, 2), -1, np.int64)),
         rescued=column(skin.rescued, False, np.zeros(k, bool)),
         head_only=column(skin.head_only, False, np.ones(k, bool)),
+        # a crown head is where two views' crowns meet
+        views=None if skin.views is None else column(skin.views, 0, np.full(k, 2, np.int64)),
     )
 
 
@@ -580,7 +583,7 @@ def _skin_candidates(
     points, half_gap = points[kept], half_gap[kept]
     cam_pairs = np.column_stack([cam_all[ia], cam_all[ib]])
     blob_pairs = np.column_stack([blob_all[ia], blob_all[ib]])
-    rescued = None
+    rescued = views = None
     if cfg.explain_away:
         merged = np.flatnonzero(ok)[kept]
         support = view_support(
@@ -599,6 +602,7 @@ def _skin_candidates(
                 points, prior, real, expected_m, cfg.expected_radius_m, cfg.rescue_pair_m
             )
         rescued = (real & ~explained)[real]
+        views = (support[real] >= 0).sum(axis=1)
         points, prior, half_gap = points[real], prior[real], half_gap[real]
         cam_pairs, blob_pairs = cam_pairs[real], blob_pairs[real]
     log.debug(
@@ -616,4 +620,5 @@ def _skin_candidates(
         blob_pairs=blob_pairs,
         rescued=rescued,
         head_only=np.zeros(len(points), dtype=bool),
+        views=views,
     )

@@ -258,6 +258,8 @@ class MultiTargetTracker:
         self._last_t_ns: int | None = None
         self._shares: dict[int, np.ndarray] = {}  # tracker id -> exclusion share per candidate
         self._head_only = np.zeros(0, dtype=bool)  # this step's candidates no hand may take
+        self._pts = np.zeros((0, 3))  # this step's candidates ...
+        self._views = np.zeros(0, dtype=np.int64)  # ... and how many cameras support each
         # (t_ns, (k, 3) unexplained candidates) of the last UNEXPLAINED_LOG_S seconds
         self._unexplained_log: deque[tuple[int, np.ndarray]] = deque()
 
@@ -312,6 +314,12 @@ class MultiTargetTracker:
             np.asarray(candidates.head_only, dtype=bool) if typed else np.zeros(len(pts), bool)
         )
 
+        self._views = (
+            np.full(len(pts), 2, np.int64)
+            if candidates.views is None
+            else np.asarray(candidates.views, dtype=np.int64)
+        )
+        self._pts = pts
         self._filter(pts, prior, dt_s)
         self._count_rescued(pts, candidates.rescued)
         pairs, drifted = self._combine_pairs()
@@ -1049,7 +1057,7 @@ class MultiTargetTracker:
             if not (ok & confirmed).any():
                 continue
             both = None
-            if head_first is None:
+            if head_first is None and not self._held(tr):
                 both = self._both_leaving(
                     tr, heads, [seeds[free_here[j]] for j in np.flatnonzero(ok)]
                 )
@@ -1079,6 +1087,20 @@ class MultiTargetTracker:
         if a.person == 0 or a.person != b.person or {a.is_hand, b.is_hand} != {True, False}:
             return None
         return b.is_hand is True
+
+    def _held(self, pair: _Track) -> bool:
+        """Whether a candidate within ``explained_radius_m`` of a combined pair's estimate
+        is supported by ``held_views`` cameras or more: one of its targets is still there.
+
+        three_people, seeds 0 and 1 at 4.73 s: the two hands of a give stayed together on a
+        candidate four views support while a ghost and another point 0.5 m away, on
+        opposite sides, became seeds; parted onto both, the pair left the hands to a new
+        tracker (two identity switches)."""
+        lc = self.cfg.lifecycle
+        if lc.held_views <= 0 or not len(self._pts):
+            return False
+        near = np.linalg.norm(self._pts - pair.mean_m, axis=1) <= lc.explained_radius_m
+        return bool((self._views[near] >= lc.held_views).any())
 
     def _both_leaving(
         self, pair: _Track, heads: np.ndarray | None, seeds: list[_Pending]

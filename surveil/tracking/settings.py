@@ -180,6 +180,14 @@ class LifecycleConfig:
         "it instead of a new tracker starting there, m",
         min=0.0,
     )
+    held_views: int = setting(
+        3,
+        "a combined pair with a candidate within explained_radius_m of its estimate that "
+        "this many cameras or more support is held there: its two targets did not both "
+        "leave it at once (two views alone may be a ghost where two departing hands' lines "
+        "of sight cross), so it parts on one seed at most (0 = no test)",
+        min=0,
+    )
     out_of_reach_frames: int = setting(
         3,
         "a combined pair of two people's hands whose estimate has been farther than "

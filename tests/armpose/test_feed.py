@@ -101,6 +101,7 @@ def test_fed_candidates_follow_the_camera_candidates(with_pairs):
             cam_pairs=np.array([[0, 1], [0, 1]]),
             blob_pairs=np.array([[0, 0], [2, 1]]),
             head_only=np.array([False, True]),
+            views=np.array([3, 2]),
         )
     out = with_arm_hands(base, [pose(LEFT, RIGHT)], obs, RIG, CFG, RADIUS_PX)
     assert len(out.points_m) == 3
@@ -111,6 +112,7 @@ def test_fed_candidates_follow_the_camera_candidates(with_pairs):
         assert out.blob_pairs[2].tolist() == [-1, -1]
         assert np.isnan(out.half_gap_m[2])
         assert out.head_only.tolist() == [False, True, False]  # an arm's hand is a hand
+        assert out.views.tolist() == [3, 2, 1]  # one view's arm model
     else:
         assert out.cam_pairs is None
 

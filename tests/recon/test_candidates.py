@@ -107,6 +107,7 @@ def test_three_targets_seen_by_four_cameras_are_the_strongest_candidates():
     np.testing.assert_allclose(best[order], targets[np.argsort(targets[:, 0])], atol=1e-6)
     np.testing.assert_allclose(cs.prior[:3], 1.0)
     assert np.all(cs.half_gap_m[:3] < 1e-6)
+    np.testing.assert_array_equal(cs.views[:3], 4)  # every camera has a blob on each target
     assert np.all(cs.blob_pairs[:3, 0] == cs.blob_pairs[:3, 1])  # true correspondences
     assert np.all(cs.cam_pairs[:, 0] < cs.cam_pairs[:, 1])
     # ghosts of two nearly coplanar views (cam0, cam3) may survive, but weakly
@@ -138,6 +139,10 @@ def test_crossing_lines_of_sight_of_two_limbs_are_explained_away(enabled):
     to_ghost = np.linalg.norm(cs.points_m - g, axis=1)
     assert (to_limb < 1e-3).sum() >= 2  # both limbs found either way
     assert (to_ghost < 0.01).any() != enabled
+    if enabled:  # A and B: cam2 and cam3 see them too
+        np.testing.assert_array_equal(cs.views[to_limb < 1e-3], 4)
+    else:
+        assert cs.views is None
 
 
 @pytest.mark.parametrize("threshold", [0.2, 0.0])

@@ -188,6 +188,9 @@ def test_a_crown_head_is_added_only_where_no_skin_candidate_is(face_blob):
         assert np.linalg.norm(cands.points_m[from_crowns][0] - head) < 0.03
         assert cands.prior[from_crowns][0] == CFG.prior
         assert (cands.blob_pairs[from_crowns] == -1).all()
+        assert cands.views[from_crowns][0] == 2  # where two views' crowns meet
+    at_hand = np.linalg.norm(cands.points_m[:, None] - hands[None], axis=2).min(axis=1) < 1e-3
+    np.testing.assert_array_equal(cands.views[at_hand], 4)  # every camera sees both hands
     # the crowns a run finds in its per-camera stage give the same candidates
     given = [
         dataclasses.replace(o, crowns_px=silhouette_crowns(o.silhouettes, cam, CFG))

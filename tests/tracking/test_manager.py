@@ -951,6 +951,37 @@ def test_two_hands_that_leave_a_pair_at_once_both_part_it(rig, rng, b_later, bot
         assert len(on_hands) == 1
 
 
+@pytest.mark.parametrize("held_views", [3, 0])
+def test_a_pair_held_by_a_well_seen_candidate_is_not_left_by_both_hands(rig, rng, held_views):
+    """Two points show 49 cm from a handshake's pair on opposite sides, each within its
+    owner's reach, as both hands' do when they leave at once (above), but the clasped hands
+    stay where they met, on a candidate four views support (three_people, seeds 0 and 1 at
+    4.73 s: a ghost and a stray point beside a give). Both hands cannot have left: the pair
+    parts on one point at most, a right hand's tracker stays on the clasped hands and none
+    starts there. With the test off (``held_views`` 0) the pair parts onto both points and
+    a new tracker takes the hands."""
+    frames, a, b, meet = shaking_hands(hold=6)
+    strays = [meet + 0.8 * (p["right_hand"] - meet) for p in (a, b)]
+    cfg = TrackingConfig(lifecycle=LifecycleConfig(held_views=held_views))
+    trk = MultiTargetTracker(cfg, rig, seed=11)
+    out = run(trk, frames, rng)
+    before = {s.label: s.target_id for s in out[-1].targets}
+    for k in range(16):
+        pts = [*_head_and_left(a), *_head_and_left(b), meet] + (strays if k >= 3 else [])
+        views = np.full(len(pts), 2)
+        views[4] = 4  # the clasped hands
+        cands = dataclasses.replace(candidates(pts, rng), views=views)
+        out.append(trk.step((len(frames) + k) * DT_NS, cands))
+    starts = [t for f in out[len(frames) :] for t in f.transitions if t.old is Phase.UNINITIALISED]
+    on_meet = [t for t in starts if np.linalg.norm(t.position_m - meet) < 0.1]
+    if held_views == 0:
+        assert on_meet
+        return
+    assert not on_meet
+    at_meet = [s for s in out[-1].targets if np.linalg.norm(s.mean_m - meet) < 0.05]
+    assert {s.target_id for s in at_meet} & {before["p1/right_hand"], before["p2/right_hand"]}
+
+
 @pytest.mark.parametrize("frames_out", [3, 0])
 def test_a_pair_that_follows_one_hand_out_of_the_others_reach_parts(rig, rng, frames_out):
     """After a handshake b's hand goes home and a's hand is never seen again: the pair has no
