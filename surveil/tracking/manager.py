@@ -1057,10 +1057,13 @@ class MultiTargetTracker:
             if not (ok & confirmed).any():
                 continue
             both = None
-            if head_first is None and not self._held(tr):
+            if head_first is None:
                 both = self._both_leaving(
                     tr, heads, [seeds[free_here[j]] for j in np.flatnonzero(ok)]
                 )
+            if both is not None and self._held(tr):
+                log.debug("t%d / t%d are held where they met: not both leaving", tr.id, other.id)
+                both = None
             fixed: tuple[int | None, int | None] = (None, None)
             if both is not None:
                 picked = [free_here[j] for j in np.flatnonzero(ok)[list(both)]]
