@@ -313,7 +313,6 @@ class MultiTargetTracker:
         self._head_only = (
             np.asarray(candidates.head_only, dtype=bool) if typed else np.zeros(len(pts), bool)
         )
-
         self._views = (
             np.full(len(pts), 2, np.int64)
             if candidates.views is None
@@ -1095,10 +1094,11 @@ class MultiTargetTracker:
         """Whether a candidate within ``explained_radius_m`` of a combined pair's estimate
         is supported by ``held_views`` cameras or more: one of its targets is still there.
 
-        three_people, seeds 0 and 1 at 4.73 s: the two hands of a give stayed together on a
-        candidate four views support while a ghost and another point 0.5 m away, on
+        three_people, seeds 0 and 1 at 4.73 s: the two hands of a handshake stayed together
+        on a candidate four views support while a ghost and another point 0.5 m away, on
         opposite sides, became seeds; parted onto both, the pair left the hands to a new
-        tracker (two identity switches)."""
+        tracker (two identity switches). Candidates without a view count count as two
+        views."""
         lc = self.cfg.lifecycle
         if lc.held_views <= 0 or not len(self._pts):
             return False
