@@ -54,6 +54,9 @@ class CandidateScore:
     def __init__(self) -> None:
         self.found50 = self.found100 = self.countable = self.false = self.n_sets = 0
         self.dists: list[float] = []
+        # per true limb (index into the ground truth's labels): the offset, m, of the
+        # nearest candidate in each frame set that two or more views see it (NaN: none)
+        self.offsets: dict[int, list[np.ndarray]] = {}
 
     def add(self, points_m: np.ndarray, truth_m: np.ndarray, n_views: np.ndarray) -> None:
         """One frame set: candidates (K, 3) and every true limb's position (L, 3; NaN where
@@ -62,6 +65,10 @@ class CandidateScore:
         present = np.isfinite(truth_m).all(axis=1)
         seen2 = present & (n_views >= 2)
         self.countable += int(seen2.sum())
+        for j in np.flatnonzero(seen2):
+            off = points_m - truth_m[j] if len(points_m) else np.full((1, 3), np.nan)
+            nearest = off[int(np.argmin(np.linalg.norm(off, axis=1)))] if len(points_m) else off[0]
+            self.offsets.setdefault(int(j), []).append(nearest)
         if not len(points_m):
             return
         d = np.linalg.norm(points_m[:, None, :] - truth_m[None, present, :], axis=2)
@@ -80,8 +87,25 @@ class CandidateScore:
             "mean_mm": 1000 * float(np.mean(self.dists)) if self.dists else float("nan"),
         }
 
+    def limb_rows(self, labels: list[str]) -> list[str]:
+        """Markdown rows per true limb: limb-frames seen by two or more views, recall within
+        100 mm, the median distance of the nearest candidate where it is farther, and the
+        median offset (x, y, z) of the nearest candidate, mm."""
+        rows = []
+        for j, found in sorted(self.offsets.items()):
+            off = np.array(found)
+            dist = np.linalg.norm(off, axis=1)  # NaN where no candidate at all
+            missed = dist[~(dist < 0.10)]
+            far = f"{1000 * np.nanmedian(missed):.0f}" if np.isfinite(missed).any() else "-"
+            med = 1000 * np.nanmedian(off, axis=0) if np.isfinite(dist).any() else [np.nan] * 3
+            rows.append(
+                f"| {labels[j]} | {len(off)} | {(dist < 0.10).mean():.3f} | {far} | "
+                f"{med[0]:+.0f}, {med[1]:+.0f}, {med[2]:+.0f} |"
+            )
+        return rows
 
-def score_run(rec_dir: Path, mcap: Path, learning_frames: int) -> dict[str, float]:
+
+def score_run(rec_dir: Path, mcap: Path, learning_frames: int) -> CandidateScore:
     """:class:`CandidateScore` of the candidates a run wrote (its ``/candidates``), frame
     sets after the background models' learning phase."""
     gt = load_ground_truth(rec_dir)
@@ -92,7 +116,7 @@ def score_run(rec_dir: Path, mcap: Path, learning_frames: int) -> dict[str, floa
         if g < 0 or gt.frames[g] < learning_frames:
             continue
         score.add(run.candidate_pos_m[run.candidate_rows(m)], gt.positions_m[g], gt.n_views[g])
-    return score.summary()
+    return score
 
 
 def bench_recording(
@@ -155,6 +179,9 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--seed", type=int, default=0, help="tracker seed of that run")
     parser.add_argument("--rerun", action="store_true", help="run the pipeline again")
+    parser.add_argument(
+        "--by-limb", action="store_true", help="with --in-run: also a table per true limb"
+    )
     args = parser.parse_args(argv)
     cfg = load_pipeline_config(args.config)
     print(
@@ -180,13 +207,28 @@ def main(argv: list[str] | None = None) -> int:
         )
         print("| scenario | recall 50 mm | recall 100 mm | false / set | true limbs / set |")
         print("|---|---|---|---|---|")
+        scores = {}
         for name in scene_names(args):
-            r = score_run(args.out / name, run_of(name, args), cfg.background.learning_frames)
+            scores[name] = score_run(
+                args.out / name, run_of(name, args), cfg.background.learning_frames
+            )
+            r = scores[name].summary()
             print(
                 f"| {name} | {r['recall50']:.3f} | {r['recall100']:.3f} "
                 f"| {r['false_per_set']:.2f} | {r['limbs_per_set']:.2f} |",
                 flush=True,
             )
+        if args.by_limb:
+            print("\nIn a run, per true limb (limb-frames seen by two or more views):\n")
+            print(
+                "| scene, limb | limb-frames | recall 100 mm | nearest when missed, median mm "
+                "| nearest offset x, y, z, median mm |"
+            )
+            print("|---|---|---|---|---|")
+            for name, score in scores.items():
+                labels = load_ground_truth(args.out / name).labels
+                for row in score.limb_rows(list(labels)):
+                    print(f"| {name} {row[2:]}")
     return 0
 
 

@@ -113,6 +113,8 @@ def measure(rec_dir: Path, cfg, max_frames: int | None) -> tuple[int, dict]:
                     arms[name].append((elbow, end))
         kinds = classify(cands.points_m, limbs, head_m, arms)
         by_cam = {rec.rig.names.index(cam): o for cam, o in obs.items()}
+        # not CandidateSet.views: that counts every crown head as two views, where this
+        # table wants the blobs each point's projection meets, crown heads included
         support = view_support(
             cands.points_m,
             cands.cam_pairs,
