@@ -227,11 +227,12 @@ def test_arm_trackers_feed_the_hands_no_two_views_see(small_recording):
     # head rise it was tuned with (the measured one moves the heads by millimetres and this
     # median to 0.34 m: docs/armpose.md, "Sensitive to the head's height"), and on the
     # silhouettes' own tops in p_o it was tuned with (tops_from_heads, the default since
-    # session 78, gives 0.31 m)
+    # session 78, gives 0.31 m), and on the pairs' midpoints it was tuned with (candidates
+    # refined from all their views, the default since session 87, give 0.27 m)
     no_face = TrackingConfig(labelling=LabellingConfig(face_weight=0.0), head_top_to_centre_m=0.0)
     cfg = PipelineConfig(
         tracking=no_face,
-        candidates=CandidateConfig(tops_from_heads=False),
+        candidates=CandidateConfig(tops_from_heads=False, refine_min_views=0),
         arms=ArmPoseConfig(enabled=True, feed_candidates=True),
     )
     pipe = Pipeline(cfg, rec.rig, load_rules())

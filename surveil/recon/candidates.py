@@ -17,7 +17,7 @@ from surveil.camera import Rig
 from surveil.datatypes import BlobSet, CameraObservation, CandidateSet
 from surveil.recon.crowns import crown_heads, silhouette_crowns
 from surveil.recon.settings import CandidateConfig, CrownConfig
-from surveil.recon.triangulate import closest_points
+from surveil.recon.triangulate import closest_points, least_squares_points
 
 log = logging.getLogger(__name__)
 
@@ -260,6 +260,54 @@ def view_support(
         for col in (0, 1):
             support[rows, cam_pairs[rows, col]] = blob_pairs[rows, col]
     return support
+
+
+def refine_from_views(
+    points_m: np.ndarray,
+    support: np.ndarray,
+    first_blob: np.ndarray,
+    origins: np.ndarray,
+    dirs: np.ndarray,
+    min_views: int,
+    outlier_m: float,
+) -> np.ndarray:
+    """Candidates that ``min_views`` or more cameras support, moved to the least-squares
+    point of those views' lines of sight (:func:`least_squares_points`); the others as they
+    are.
+
+    A pair's midpoint uses two of the views that see a limb; calibration error and each
+    blob centroid's own error then fall on those two alone. A second solve leaves out the
+    lines farther than ``outlier_m`` from the first point (a supporting blob of another
+    limb within ``support_radius_px``); a candidate left with fewer than two lines keeps
+    its midpoint.
+
+    Parameters
+    ----------
+    points_m : (K, 3) float -- the candidates, m
+    support : (K, M) int -- per rig camera, the supporting blob (-1 none; :func:`view_support`)
+    first_blob : (M,) int -- per rig camera, the global index of its blob 0 in ``origins``
+        (-1: a camera without blobs)
+    origins, dirs : (B, 3) float -- every blob's line of sight, all cameras' blobs in turn
+    min_views, outlier_m : ``CandidateConfig.refine_min_views``, ``refine_outlier_m``
+
+    Returns
+    -------
+    (K, 3) float64
+    """
+    out = np.array(points_m, dtype=np.float64)
+    rows = np.flatnonzero((support >= 0).sum(axis=1) >= min_views)
+    if len(rows) == 0:
+        return out
+    sup = support[rows]
+    use = sup >= 0
+    idx = np.where(use, first_blob[None, :] + sup, 0)
+    o, d = origins[idx], dirs[idx]
+    _, dist = least_squares_points(o, d, use)
+    use &= ~(dist > outlier_m)  # NaN distances (no first point) keep the lines
+    second, _ = least_squares_points(o, d, use)
+    ok = np.isfinite(second).all(axis=1)
+    out[rows[ok]] = second[ok]
+    return out
 
 
 def explain_away(support: np.ndarray, prior: np.ndarray) -> np.ndarray:
@@ -604,6 +652,18 @@ def _skin_candidates(
         rescued = (real & ~explained)[real]
         views = (support[real] >= 0).sum(axis=1)
         points, prior, half_gap = points[real], prior[real], half_gap[real]
+        if cfg.refine_min_views >= 2:
+            global_blob = np.full(len(rig.cameras) + 1, -1, dtype=np.int64)
+            global_blob[seen] = starts[:-1]
+            points = refine_from_views(
+                points,
+                support[real],
+                global_blob[: len(rig.cameras)],
+                origins_all,
+                dirs_all,
+                cfg.refine_min_views,
+                cfg.refine_outlier_m,
+            )
         cam_pairs, blob_pairs = cam_pairs[real], blob_pairs[real]
     log.debug(
         "candidates: %d pairs, %d pass the prior, %d after merging, %d after explaining away",

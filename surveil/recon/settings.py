@@ -189,7 +189,28 @@ class CandidateConfig:
         "a blob whose centroid is within this of a candidate's projection supports it, px",
         min=0.0,
     )
+    refine_min_views: int = setting(
+        3,
+        "a candidate that this many cameras support (explain_away's support) moves to the "
+        "least-squares point of those views' lines of sight instead of its pair's midpoint "
+        '(0 = never; 2 or more). Not in the paper (docs/candidates.md, "Refined from all '
+        'views")',
+        min=0,
+    )
+    refine_outlier_m: float = setting(
+        0.03,
+        "lines of sight farther than this from the first least-squares point are left out of "
+        "a second solve (a supporting blob of another limb), m",
+        min=0.0,
+    )
     crowns: CrownConfig = setting(
         default_factory=CrownConfig,
         doc="head candidates from the silhouettes' crowns (docs/candidates.md, 'Crowns')",
     )
+
+    def __post_init__(self) -> None:
+        if self.refine_min_views == 1:
+            raise ValueError(
+                "refine_min_views must be 0 (off) or 2 or more: one line of sight has no "
+                "least-squares point"
+            )

@@ -75,3 +75,52 @@ def closest_points(
     midpoints = 0.5 * (p1 + p2)
     half_gap = np.where(valid, 0.5 * np.linalg.norm(p1 - p2, axis=1), np.inf)
     return midpoints, half_gap
+
+
+def least_squares_points(
+    origins: np.ndarray, dirs: np.ndarray, use: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The point nearest, in summed squared distance, to each of K bundles of 3-D lines.
+
+    Bundle k holds the lines ``origins[k, m] + c * dirs[k, m]`` with ``use[k, m]``. The point
+    solves sum_m P_m x = sum_m P_m o_m, P_m = I - d_m d_m^T (d_m unit): the N-view
+    generalisation of the common perpendicular's midpoint (:func:`closest_points`), to which
+    it reduces for two lines.
+
+    Parameters
+    ----------
+    origins, dirs : (K, M, 3) float -- points on the lines and their directions (any
+        non-zero length), metres
+    use : (K, M) bool -- which lines take part
+
+    Returns
+    -------
+    points_m : (K, 3) float64 -- NaN where fewer than two lines take part or they are
+        (near-)parallel
+    distances_m : (K, M) float64 -- each line's distance from its bundle's point (NaN where
+        the point is)
+
+    Examples
+    --------
+    >>> o = np.array([[[0.0, 0, 0], [0.0, 0, 2], [5.0, 5, 1]]])
+    >>> d = np.array([[[1.0, 0, 0], [0.0, 1, 0], [-1.0, -1, 0]]])
+    >>> x, dist = least_squares_points(o, d, np.array([[True, True, False]]))
+    >>> x.round(6).tolist(), dist.round(6).tolist()
+    ([[0.0, 0.0, 1.0]], [[1.0, 1.0, 0.0]])
+    """
+    origins = np.asarray(origins, dtype=np.float64)
+    dirs = np.asarray(dirs, dtype=np.float64)
+    require_shape("origins", origins, (None, None, 3), np.floating)
+    require_shape("dirs", dirs, origins.shape, np.floating)
+    require_shape("use", use, origins.shape[:2], np.bool_)
+    unit = dirs / np.linalg.norm(dirs, axis=2, keepdims=True)
+    proj = np.eye(3) - unit[..., :, None] * unit[..., None, :]  # (K, M, 3, 3)
+    used = np.where(use[..., None, None], proj, 0.0)
+    a = used.sum(axis=1)
+    b = np.einsum("kmij,kmj->ki", used, origins)
+    solvable = (use.sum(axis=1) >= 2) & (np.abs(np.linalg.det(a)) > 1e-12)
+    points = np.full((len(a), 3), np.nan)
+    if solvable.any():
+        points[solvable] = np.linalg.solve(a[solvable], b[solvable][..., None])[..., 0]
+    off = np.einsum("kmij,kmj->kmi", proj, points[:, None] - origins)
+    return points, np.linalg.norm(off, axis=2)

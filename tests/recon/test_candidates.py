@@ -19,6 +19,7 @@ from surveil.recon.candidates import (
     floor_relative_v,
     make_candidates,
     project_into,
+    refine_from_views,
     rescue_expected,
     silhouette_prior,
     view_support,
@@ -475,6 +476,8 @@ def test_config_rejects_out_of_range_values_by_key():
     with pytest.raises(ConfigError, match="recon.sigma_gap_m must be >= "):
         from_table(CandidateConfig, {"sigma_gap_m": 0.0}, "run.toml: recon")
     assert from_table(CandidateConfig, {"merge_boost": 0.2}, "x").merge_boost == 0.2
+    with pytest.raises(ConfigError, match="recon: refine_min_views must be 0 .off. or 2"):
+        from_table(CandidateConfig, {"refine_min_views": 1}, "run.toml: recon")
 
 
 def test_a_hand_in_a_silhouette_merged_with_a_taller_person_takes_its_own_heads_top():
@@ -500,3 +503,58 @@ def test_a_hand_in_a_silhouette_merged_with_a_taller_person_takes_its_own_heads_
     cs = make_candidates(obs, rig, on, crowns_m=crowns)
     np.testing.assert_allclose(cs.points_m, hand, atol=1e-6)
     assert cs.prior[0] > 0.7
+
+
+def _noisy(obs: CameraObservation, rng: np.random.Generator, px: float) -> CameraObservation:
+    blobs = obs.blobs
+    moved = blobs.centroids_px + rng.normal(scale=px, size=blobs.centroids_px.shape)
+    return dataclasses.replace(obs, blobs=dataclasses.replace(blobs, centroids_px=moved))
+
+
+@pytest.mark.parametrize("min_views", [3, 0])
+def test_candidates_seen_by_four_views_are_refined_from_all_of_them(rng, min_views):
+    """Blob centres one pixel off: a candidate four views support moves from its best
+    pair's midpoint to the least-squares point of its four lines of sight, nearer the
+    target (``refine_min_views``); with the refinement off it stays at the midpoint."""
+    rig = _rig()
+    targets = np.array([[2.5, 1.5, 1.6], [3.6, 2.5, 1.1], [3.0, 1.2, 1.3]])
+    cfg = CandidateConfig(refine_min_views=min_views)
+    err = {}
+    for refine in (cfg, CandidateConfig(refine_min_views=0)):
+        found = []
+        for trial in range(30):
+            noise = np.random.default_rng(trial)
+            obs = [_noisy(_observation(cam, targets), noise, 1.0) for cam in rig]
+            cs = make_candidates(obs, rig, refine)
+            d = np.linalg.norm(cs.points_m[:, None] - targets[None], axis=2)
+            found.append(d.min(axis=0))
+        err[refine is cfg] = np.median(np.concatenate(found))
+    if min_views:
+        assert err[True] < 0.9 * err[False]
+    else:
+        assert err[True] == err[False]
+
+
+def test_refinement_leaves_out_a_supporting_blob_of_another_limb():
+    """Three views see a hand; a fourth view's blob of the other hand, 6 px from the
+    projection, supports it too. The first least-squares point leans towards that line of
+    sight; the second solve leaves it out and finds the hand. A candidate two views
+    support keeps its midpoint."""
+    rig = _rig()
+    hand = np.array([3.0, 2.0, 1.0])
+    lines = [cam.backproject(cam.project(hand[None])[0]) for cam in rig]
+    origins = np.array([o for o, _ in lines])
+    dirs = np.array([d[0] for _, d in lines])
+    cam3 = rig.cameras[3]
+    px = cam3.project(hand[None])[0] + [6.0, 0.0]
+    o3, d3 = cam3.backproject(px)
+    origins = np.vstack([origins, o3])  # global blob 4: cam3's blob 1
+    dirs = np.vstack([dirs, d3])
+    first_blob = np.array([0, 1, 2, 3])
+    support = np.array([[0, 0, 0, 1], [0, 0, -1, -1]])
+    start = np.array([hand + [0.02, 0.0, 0.0], hand + [0.01, 0.01, 0.0]])
+    out = refine_from_views(start, support, first_blob, origins, dirs, 3, 0.03)
+    np.testing.assert_allclose(out[0], hand, atol=1e-6)
+    np.testing.assert_array_equal(out[1], start[1])
+    kept = refine_from_views(start, support, first_blob, origins, dirs, 3, 1.0)
+    assert np.linalg.norm(kept[0] - hand) > 0.005  # with the far line in, it leans
