@@ -302,11 +302,13 @@ def refine_from_views(
     use = sup >= 0
     idx = np.where(use, first_blob[None, :] + sup, 0)
     o, d = origins[idx], dirs[idx]
-    _, dist = least_squares_points(o, d, use)
-    use &= ~(dist > outlier_m)  # NaN distances (no first point) keep the lines
-    second, _ = least_squares_points(o, d, use)
-    ok = np.isfinite(second).all(axis=1)
-    out[rows[ok]] = second[ok]
+    refined, dist = least_squares_points(o, d, use)
+    far = use & (dist > outlier_m)
+    again = far.any(axis=1)
+    if again.any():
+        refined[again] = least_squares_points(o[again], d[again], use[again] & ~far[again])[0]
+    ok = np.isfinite(refined).all(axis=1)
+    out[rows[ok]] = refined[ok]
     return out
 
 
