@@ -15,7 +15,11 @@ learning), per scenario and limb type (head, hand):
   the synthetic calibration error), mean of the pairwise midpoints over the views that see
   it: the error a perfect blob centre would still have, mm;
 - ``px``: the nearest blob point within 25 px of the true projection in each of those views:
-  median distance and mean offset (u, v; v down), px.
+  median distance and mean offset (u, v; v down), px;
+- ``steadiness``: how much the candidate's offset changes from one frame set to the next
+  where the limb has a candidate in both, median and 90th percentile, mm -- jitter the
+  tracker has to smooth (a limb whose candidate comes from a different pair of views in
+  each frame set jumps by the difference of their calibration errors).
 
 ``--by-limb`` also prints the candidate figures per true limb (``p1/left_hand``...).
 """
@@ -57,7 +61,8 @@ def measure(rec_dir: Path, cfg: PipelineConfig, max_frames: int | None) -> dict:
     rec, gt = open_recording(rec_dir), load_ground_truth(rec_dir)
     true_rig = load_rig(rec_dir / GT_DIR / "rig_true.yaml")
     cams = list(gt.cameras)
-    out = {label: {"cand": [], "floor": [], "px": []} for label in gt.labels}
+    out = {label: {"cand": [], "floor": [], "px": [], "step": []} for label in gt.labels}
+    last: dict[str, tuple[int, np.ndarray]] = {}  # label -> (frame set, candidate offset)
     for fs, obs, _ in observe_recording(rec, cfg, max_frames=max_frames):
         if fs.index < cfg.background.learning_frames:
             continue
@@ -82,7 +87,12 @@ def measure(rec_dir: Path, cfg: PipelineConfig, max_frames: int | None) -> dict:
             if len(cands.points_m):
                 d = np.linalg.norm(cands.points_m - truth, axis=1)
                 if d.min() < MATCH_M:
-                    out[label]["cand"].append(cands.points_m[d.argmin()] - truth)
+                    offset = cands.points_m[d.argmin()] - truth
+                    out[label]["cand"].append(offset)
+                    before = last.get(label)
+                    if before is not None and before[0] == fs.index - 1:
+                        out[label]["step"].append(float(np.linalg.norm(offset - before[1])))
+                    last[label] = (fs.index, offset)
     return out
 
 
@@ -90,7 +100,9 @@ def row(name: str, what: str, parts: list[dict]) -> str:
     cand = 1000 * np.array([o for p in parts for o in p["cand"]]).reshape(-1, 3)
     floor = 1000 * np.array([f for p in parts for f in p["floor"]])
     px = np.array([o for p in parts for o in p["px"]]).reshape(-1, 2)
+    step = 1000 * np.array([s for p in parts for s in p["step"]])
     dist = np.linalg.norm(cand, axis=1)
+    steady = f"{np.median(step):.0f} / {np.percentile(step, 90):.0f}" if len(step) else "-"
 
     def vec(v: np.ndarray) -> str:
         return ", ".join(f"{x:+.0f}" if v.shape[1] == 3 else f"{x:+.1f}" for x in v.mean(0))
@@ -100,7 +112,7 @@ def row(name: str, what: str, parts: list[dict]) -> str:
     return (
         f"| {name} | {what} | {len(cand)} | {dist.mean():.0f} / {np.median(dist):.0f} | "
         f"{vec(cand)} | {floor.mean():.0f} / {np.median(floor):.0f} | "
-        f"{np.median(np.linalg.norm(px, axis=1)):.1f} | {vec(px)} |"
+        f"{np.median(np.linalg.norm(px, axis=1)):.1f} | {vec(px)} | {steady} |"
     )
 
 
@@ -115,9 +127,10 @@ def main(argv: list[str] | None = None) -> int:
     cfg = load_pipeline_config(args.config)
     print(
         "| scenario | limbs | matched | cand mean / median mm | cand offset x, y, z mm | "
-        "calibration floor mean / median mm | blob px median | blob offset u, v px |"
+        "calibration floor mean / median mm | blob px median | blob offset u, v px | "
+        "steadiness median / 90 % mm |"
     )
-    print("|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|")
     for name in scene_names(args):
         found = measure(render(name, args.out), cfg, args.max_frames)
         for kind in ("head", "hand"):
