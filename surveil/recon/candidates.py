@@ -655,12 +655,12 @@ def _skin_candidates(
         views = (support[real] >= 0).sum(axis=1)
         points, prior, half_gap = points[real], prior[real], half_gap[real]
         if cfg.refine_min_views >= 2:
-            global_blob = np.full(len(rig.cameras) + 1, -1, dtype=np.int64)
-            global_blob[seen] = starts[:-1]
+            first_blob = np.full(len(rig.cameras), -1, dtype=np.int64)
+            first_blob[seen] = starts[:-1]
             points = refine_from_views(
                 points,
                 support[real],
-                global_blob[: len(rig.cameras)],
+                first_blob,
                 origins_all,
                 dirs_all,
                 cfg.refine_min_views,

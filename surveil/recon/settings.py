@@ -191,10 +191,10 @@ class CandidateConfig:
     )
     refine_min_views: int = setting(
         3,
-        "a candidate that this many cameras support (explain_away's support) moves to the "
-        "least-squares point of those views' lines of sight instead of its pair's midpoint "
-        '(0 = never; 2 or more). Not in the paper (docs/candidates.md, "Refined from all '
-        'views")',
+        "a candidate that this many cameras support (explain_away's support: needs "
+        "explain_away on) moves to the least-squares point of those views' lines of sight "
+        "instead of its pair's midpoint (0 = never; 2 or more). Not in the paper "
+        '(docs/candidates.md, "Refined from all views")',
         min=0,
     )
     refine_outlier_m: float = setting(
