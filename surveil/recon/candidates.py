@@ -81,13 +81,17 @@ def merged_tops(
     rig: Rig,
     by_cam: Mapping[int, CameraObservation],
     head_drop_m: float = 0.12,
+    headless_m: float = 0.0,
 ) -> np.ndarray:
     """(N,) the silhouette top row for p_o of each blob: where its silhouette holds two or
     more tracked heads (people merged in that view), the row of the crown of the one
-    nearest to Z horizontally; elsewhere ``top_px``.
+    nearest to Z horizontally; with ``headless_m`` > 0, where it holds none but a tracked
+    head's centre projects above its top row, between its box's columns, and that head is
+    within ``headless_m`` of Z horizontally, the row of the nearest such head's crown (the
+    background model lost the head: dark hair against a dark door); elsewhere ``top_px``.
 
     A head is in a silhouette when the point ``head_drop_m`` under its crown (its centre)
-    projects onto it.
+    projects onto it. Headless silhouettes need ``Silhouettes.boxes_px`` (a run's have them).
 
     Parameters
     ----------
@@ -114,11 +118,26 @@ def merged_tops(
         sel = np.flatnonzero(cams == m)
         inside = (head_sil[None, :] == silhouettes[sel, None]) & (silhouettes[sel, None] > 0)
         merged = inside.sum(axis=1) >= 2
-        if not merged.any():
+        if merged.any():
+            d = np.where(inside, horiz[sel], np.inf)
+            nearest = d.argmin(axis=1)
+            out[sel[merged]] = crown_v[nearest[merged]]
+        boxes = by_cam[m].silhouettes.boxes_px
+        headless = sel[(inside.sum(axis=1) == 0) & (silhouettes[sel] > 0)]
+        if headless_m <= 0 or boxes is None or not len(headless):
             continue
-        d = np.where(inside, horiz[sel], np.inf)
-        nearest = d.argmin(axis=1)
-        out[sel[merged]] = crown_v[nearest[merged]]
+        x0, _, width, _ = boxes[silhouettes[headless] - 1].T[..., None]  # (R, 1) each
+        u, v = px[:, 0], px[:, 1]
+        above = (
+            seen
+            & (u >= x0)
+            & (u < x0 + width)
+            & (v < out[headless, None])
+            & (horiz[headless] <= headless_m)
+        )  # (R, H)
+        has = above.any(axis=1)
+        nearest = np.where(above, horiz[headless], np.inf).argmin(axis=1)
+        out[headless[has]] = crown_v[nearest[has]]
     return out
 
 
@@ -594,10 +613,21 @@ def _skin_candidates(
         both = np.concatenate([ia, ib])
         twice = np.concatenate([points, points])
         v_px, top_px = rows_all[both].T
-        if cfg.tops_from_heads and crowns_m is not None and len(crowns_m) >= 2:
+        if (
+            cfg.tops_from_heads
+            and crowns_m is not None
+            and (len(crowns_m) >= 2 or (cfg.headless_top_m > 0 and len(crowns_m)))
+        ):
             sil_all = np.concatenate([by_cam[m].blobs.silhouette for m in seen])
             top_px = merged_tops(
-                twice, cam_all[both], sil_all[both], top_px, crowns_m, rig, by_cam
+                twice,
+                cam_all[both],
+                sil_all[both],
+                top_px,
+                crowns_m,
+                rig,
+                by_cam,
+                headless_m=cfg.headless_top_m,
             )
         d_v = np.split(floor_relative_v(twice, cam_all[both], v_px, top_px, rig), 2)
     else:

@@ -116,6 +116,14 @@ class CandidateConfig:
         "crown of the head nearest to Z (the tracker's feedback) instead of the silhouette's "
         "top row, which there is the tallest person's (docs/candidates.md)",
     )
+    headless_top_m: float = setting(
+        0.5,
+        "with tops_from_heads: a silhouette that holds no tracked head but has one's centre "
+        "above its top row, within its columns and this near Z horizontally, takes that "
+        "head's crown row as its top for p_o (a head the background model lost: dark hair "
+        "against a dark door); 0 = off (docs/candidates.md)",
+        min=0.0,
+    )
     sigma_gap_m: float = setting(
         0.02, "p_t width (eq. 26): std of the half gap d between lines of sight, m", min=1e-6
     )

@@ -505,6 +505,39 @@ def test_a_hand_in_a_silhouette_merged_with_a_taller_person_takes_its_own_heads_
     assert cs.prior[0] > 0.7
 
 
+def _with_boxes(obs: CameraObservation) -> CameraObservation:
+    """``obs`` whose silhouettes know their bounding boxes, as a run's do."""
+    sil = obs.silhouettes
+    box = np.array([cv2.boundingRect((sil.labels == 1).view(np.uint8))], np.int32)
+    return dataclasses.replace(obs, silhouettes=dataclasses.replace(sil, boxes_px=box))
+
+
+def test_a_silhouette_that_lost_its_head_takes_the_tracked_heads_top():
+    """cam0's background model lost the person's head (dark hair against a dark door): the
+    silhouette ends at the shoulders, the hand sits lower in it than in cam1, and p_o
+    rejects the pair. With ``headless_top_m`` the top is the crown of the tracked head
+    just above the silhouette; a head farther from Z than that, or no tracked head,
+    changes nothing, and so does the setting off (0)."""
+    rig = _rig(2)
+    crown = np.array([3.0, 2.0, 1.85])
+    hand = np.array([[3.0, 2.15, 1.3]])  # raised
+    shoulders = np.array([[3.0, 2.0, 1.4]])
+    obs = [
+        _with_boxes(_people(rig.cameras[0], shoulders, hand)),
+        _with_boxes(_people(rig.cameras[1], crown[None], hand)),
+    ]
+    off = dataclasses.replace(CFG, headless_top_m=0.0)
+    on = CFG
+    assert on.headless_top_m == 0.5  # on by default
+    assert len(make_candidates(obs, rig, off, crowns_m=crown[None]).points_m) == 0
+    assert len(make_candidates(obs, rig, on).points_m) == 0
+    far = crown + [0.0, 0.6, 0.0]  # above the silhouette in cam0, but 0.6 m from the hand
+    assert len(make_candidates(obs, rig, on, crowns_m=far[None]).points_m) == 0
+    cs = make_candidates(obs, rig, on, crowns_m=crown[None])
+    np.testing.assert_allclose(cs.points_m, hand, atol=1e-6)
+    assert cs.prior[0] > 0.7
+
+
 def _noisy(obs: CameraObservation, rng: np.random.Generator, px: float) -> CameraObservation:
     blobs = obs.blobs
     moved = blobs.centroids_px + rng.normal(scale=px, size=blobs.centroids_px.shape)
