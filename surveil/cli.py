@@ -154,6 +154,7 @@ def cmd_eval(args: argparse.Namespace) -> ExitCode:
 def cmd_run(args: argparse.Namespace) -> ExitCode:
     from surveil.activity import load_rules
     from surveil.io.mcap_writer import McapSink, McapWriter
+    from surveil.io.prefetch import prefetched
     from surveil.io.recording import open_recording
     from surveil.pipeline import (
         Pipeline,
@@ -194,7 +195,7 @@ def cmd_run(args: argparse.Namespace) -> ExitCode:
         )
     stop = args.max_frames
     summary = run_recording(
-        lambda: rec.framesets(0, stop),
+        lambda: prefetched(rec.framesets(0, stop)),
         rec.count_framesets(0, stop),
         pipeline,
         sinks,
