@@ -26,6 +26,16 @@ ARM_ASPECT = 3.0
 # 0.818 of a person's height, Drillis and Contini); a bare forearm's hand is its end
 # farther from there
 SHOULDER_DROP_REL = 0.18
+# where a bare forearm can lie, as fractions of its silhouette's height from the top: below the
+# head (the top 0.13 of a person's height; Drillis and Contini) and above the shins (a hanging
+# hand's fingertips are 0.62 from the top, the knees 0.715; seen from above, as the room's
+# cameras do, a hand swinging while walking reaches 0.75 of the silhouette)
+HEAD_ZONE_REL = 0.1
+KNEE_REL = 0.8
+# ... and a blob reaching into the head's zone is the head's unless its centroid lies farther
+# than this from the silhouette's centre column (a head is 0.09 of a person's height wide):
+# there it is a forearm raised beside the head
+HEAD_HALF_WIDTH_REL = 0.07
 LIMBS_PER_PERSON = 3  # a head and two hands: blobs the opening erased only fill these
 MIN_OUTLINE_PX = 5  # fewer outline pixels than this: no verdict, the blob is kept
 
@@ -351,6 +361,7 @@ def hand_ends(
     arm_max_length_rel: float,
     arm_min_width_rel: float,
     hand_length_rel: float,
+    arm_zone: bool = False,
 ) -> np.ndarray:
     """Each blob's point: its centre of mass, or its hand end when it is a bare forearm.
 
@@ -379,6 +390,10 @@ def hand_ends(
     body_heights_px : (B,) float64 -- height of each blob's silhouette
     arm_length_rel, arm_max_length_rel, arm_min_width_rel, hand_length_rel : float --
         ``BlobConfig``'s bounds, fractions of the silhouette's height
+    arm_zone : bool -- only blobs that end above ``KNEE_REL`` of their silhouette's height
+        from its top and begin below ``HEAD_ZONE_REL`` of it, or lie beside the head
+        (``HEAD_HALF_WIDTH_REL`` from the silhouette's centre column), can be arms
+        (``BlobConfig.arm_zone``)
 
     Returns
     -------
@@ -422,6 +437,22 @@ def hand_ends(
     # point each arm's axis away from its silhouette's shoulder point
     away = np.einsum("bi,bi->b", centroids_px - shoulders_px, axis)
     axis *= np.where(away < 0, -1.0, 1.0)[:, None]
+    if arm_zone:
+        # a face with its neck or an ear with its neck, seen from the side or behind, is as long
+        # and thin as a forearm, and so is a shin in skin-coloured trousers: a forearm lies
+        # between the head and the shins, or beside the head when raised (one raised in front
+        # of the face keeps its centre of mass)
+        top = np.full(n, np.inf)
+        bottom = np.full(n, -np.inf)
+        np.minimum.at(top, blob_of, pixels_px[:, 1])
+        np.maximum.at(bottom, blob_of, pixels_px[:, 1])
+        silhouette_top = shoulders_px[:, 1] - SHOULDER_DROP_REL * body_heights_px
+        below_face = top > silhouette_top + HEAD_ZONE_REL * body_heights_px
+        beside_head = np.abs(centroids_px[:, 0] - shoulders_px[:, 0]) > (
+            HEAD_HALF_WIDTH_REL * body_heights_px
+        )
+        arm &= below_face | beside_head
+        arm &= bottom < silhouette_top + KNEE_REL * body_heights_px
     t = np.einsum("pi,pi->p", d, axis[blob_of])
     tip = np.full(n, -np.inf)
     np.maximum.at(tip, blob_of, t)
@@ -700,6 +731,7 @@ def _extract(
             cfg.arm_max_length_rel,
             cfg.arm_min_width_rel,
             cfg.hand_length_rel,
+            cfg.arm_zone,
         )
     rel_v = _relative_v(cents[:, 1], sil_of, silhouettes)
     out_labels = np.zeros(n_all, np.int32)

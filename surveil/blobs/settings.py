@@ -281,6 +281,13 @@ class BlobConfig:
         "sparser)",
         min=0.0,
     )
+    arm_zone: bool = setting(
+        True,
+        "... and only a blob that ends above 0.8 of its silhouette's height from the top (a "
+        "shin in skin-coloured trousers is as long and thin) and, if it reaches into the top "
+        "0.1, lies beside the head (a face or an ear with its neck, seen from the side or "
+        "behind, is too); false = anywhere in the silhouette, as before session 89",
+    )
     hand_length_rel: float = setting(
         0.11,
         "... the hand end: the centre of mass of the blob's last this much (times the "

@@ -222,6 +222,35 @@ def test_a_bare_forearm_stands_for_its_hand_end_and_a_face_for_its_centre():
     assert point == pytest.approx([72.0, 16.0])
 
 
+def test_arm_zone_keeps_a_neck_and_a_shin_at_their_centres_and_still_moves_real_arms():
+    """Seen from the side or behind, an ear or a face with its neck is a strip as long and
+    thin as a forearm, and so is a shin in skin-coloured trousers; without ``arm_zone`` both
+    move to a tip like a bare forearm. With it (the default) a blob that reaches into the
+    head's zone (above row 10 + HEAD_ZONE_REL x 80) within HEAD_HALF_WIDTH_REL x 80 of the
+    silhouette's centre column (49.5), or below KNEE_REL (row 10 + 64), keeps its centre; a
+    hanging forearm ending at row 73 and one raised beside the head still move to their hand
+    ends."""
+    sil = _one_person()
+    zoned = dataclasses.replace(BARE_ARMS, hand_length_rel=0.1)
+    assert zoned.arm_zone
+    anywhere = dataclasses.replace(zoned, arm_zone=False)
+    neck = np.zeros((H, W), bool)
+    neck[14:38, 47:52] = True  # from the ear (row 14, in the head's zone) down the neck
+    shin = np.zeros((H, W), bool)
+    shin[62:86, 40:45] = True  # below the knee
+    for strip in (neck, shin):
+        centre = np.argwhere(strip)[:, ::-1].mean(axis=0)
+        assert extract_blobs(strip, sil, zoned).centroids_px[0] == pytest.approx(centre)
+        moved = extract_blobs(strip, sil, anywhere).centroids_px[0]
+        assert abs(moved[1] - centre[1]) > 5
+    hanging = np.zeros((H, W), bool)
+    hanging[50:74, 70:75] = True  # fingertips at row 73
+    assert extract_blobs(hanging, sil, zoned).centroids_px[0] == pytest.approx([72.0, 69.0])
+    raised = np.zeros((H, W), bool)
+    raised[12:36, 70:75] = True  # beside the head, 22.5 px from the centre column
+    assert extract_blobs(raised, sil, zoned).centroids_px[0] == pytest.approx([72.0, 16.0])
+
+
 def test_a_hanging_forearm_level_with_the_hips_ends_in_its_lower_tip():
     """A silhouette's centre of mass is at hip height, level with a hanging hand: a forearm
     centred on that row is as far from it at both tips. The hand end is measured from the
