@@ -1,0 +1,125 @@
+"""How many blobs the bare-forearm option moves to a hand end, per scene (docs/blobs.md, "Bare
+forearms").
+
+    python benchmarks/arm_moves.py [--config TOML] [--sheet PNG] [NAME ...]
+
+Runs the front end (``benchmarks/front_end.py``, N_h the true number of people) with the given
+settings (default: the defaults with ``[blobs] arm_length_rel = 0.17``) and counts the blobs
+whose point :func:`surveil.blobs.extract.hand_ends` moves off their centre of mass. Only one
+scene has people in short sleeves (negative's p2); on the others every move is a blob taken
+for a forearm that is not one. ``--sheet`` writes a contact sheet of the first moves of the
+last scene (old point blue, new point red, the blob green) to look at what moved.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+from pathlib import Path
+
+import cv2
+import numpy as np
+from front_end import observe_recording
+from pipeline_bench import add_scene_arguments, render, scene_names
+
+import surveil.blobs.extract as extract
+import surveil.pipeline as pipeline
+from surveil.blobs.extract import blob_margin_px
+from surveil.io.ground_truth import load_ground_truth
+from surveil.io.recording import open_recording
+from surveil.pipeline import load_pipeline_config
+
+ROOT = Path(__file__).resolve().parents[1]
+TILE_PX = 120
+
+
+def count_moves(rec_dir: Path, cfg, sheet_tiles: int = 0) -> tuple[int, int, list[np.ndarray]]:
+    """Blobs seen, blobs moved and up to ``sheet_tiles`` crops of the moved ones."""
+    pending: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # old, new, blob pixels
+    by_blobset: dict[int, list] = {}  # id of a BlobSet -> its moves
+    plain_ends, plain_extract = extract.hand_ends, pipeline.extract_blobs
+
+    def ends_spy(pixels_px, blob_of, centroids_px, *args):
+        out = plain_ends(pixels_px, blob_of, centroids_px, *args)
+        for k in np.flatnonzero(np.linalg.norm(out - centroids_px, axis=1) > 0.5):
+            pending.append((centroids_px[k], out[k], pixels_px[blob_of == k]))
+        return out
+
+    def extract_spy(*args, **kwargs):
+        blobs = plain_extract(*args, **kwargs)
+        by_blobset[id(blobs)] = pending.copy()
+        pending.clear()
+        return blobs
+
+    gt = load_ground_truth(rec_dir)
+    n_people = len({label.split("/")[0] for label in gt.labels})
+    n_blobs = n_moved = 0
+    tiles: list[np.ndarray] = []
+    extract.hand_ends, pipeline.extract_blobs = ends_spy, extract_spy
+    try:
+        for fs, observations, _ in observe_recording(open_recording(rec_dir), cfg, n_people):
+            for cam, obs in observations.items():
+                n_blobs += len(obs.blobs)
+                moves = by_blobset.pop(id(obs.blobs), [])
+                n_moved += len(moves)
+                # the spy saw the coordinates of the box around the people that the blob
+                # stage works on (extract_blobs): shift them back to the frame's
+                region = obs.silhouettes.region(blob_margin_px(cfg.blobs, obs.skin.shape[1]))
+                shift = (
+                    np.zeros(2) if region is None else np.array([region[1].start, region[0].start])
+                )
+                for old, new, px in moves[: max(sheet_tiles - len(tiles), 0)]:
+                    tiles.append(_tile(fs.images[cam], old + shift, new + shift, px + shift))
+                    cv2.putText(tiles[-1], f"{fs.index} {cam}", (3, 14), 0, 0.45, (255,) * 3)
+            by_blobset.clear()
+    finally:
+        extract.hand_ends, pipeline.extract_blobs = plain_ends, plain_extract
+    return n_blobs, n_moved, tiles
+
+
+def _tile(image: np.ndarray, old: np.ndarray, new: np.ndarray, px: np.ndarray) -> np.ndarray:
+    img = image.copy()
+    cols, rows = px[:, 0].astype(int), px[:, 1].astype(int)
+    img[rows, cols] = (0.5 * img[rows, cols] + (0, 127, 0)).astype(np.uint8)
+    cv2.circle(img, tuple(int(v) for v in old), 3, (255, 0, 0), -1)
+    cv2.circle(img, tuple(int(v) for v in new), 3, (0, 0, 255), -1)
+    u, v = (int(c) - TILE_PX // 2 for c in new)
+    u, v = max(u, 0), max(v, 0)
+    crop = img[v : v + TILE_PX, u : u + TILE_PX]
+    crop = cv2.copyMakeBorder(
+        crop, 0, TILE_PX - crop.shape[0], 0, TILE_PX - crop.shape[1], cv2.BORDER_CONSTANT
+    )
+    return cv2.resize(crop, None, fx=2, fy=2, interpolation=cv2.INTER_NEAREST)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_scene_arguments(parser)
+    parser.add_argument("--out", type=Path, default=ROOT / "out" / "bench_synth")
+    parser.add_argument("--config", type=Path, help="settings (default: the option on)")
+    parser.add_argument("--sheet", type=Path, help="contact sheet PNG of the last scene's moves")
+    args = parser.parse_args(argv)
+    cfg = load_pipeline_config(args.config)
+    if args.config is None:
+        cfg = dataclasses.replace(cfg, blobs=dataclasses.replace(cfg.blobs, arm_length_rel=0.17))
+    names = scene_names(args)
+    print("| scenario | blobs | moved | share |")
+    print("|---|---|---|---|")
+    for i, name in enumerate(names):
+        last = i == len(names) - 1 and args.sheet is not None
+        n_blobs, n_moved, tiles = count_moves(render(name, args.out), cfg, 15 if last else 0)
+        print(f"| {name} | {n_blobs} | {n_moved} | {n_moved / max(n_blobs, 1):.4f} |", flush=True)
+        if last and tiles:
+            blank = np.zeros_like(tiles[0])
+            rows = [
+                tiles[j : j + 5] + [blank] * (5 - len(tiles[j : j + 5]))
+                for j in range(0, len(tiles), 5)
+            ]
+            cv2.imwrite(str(args.sheet), np.vstack([np.hstack(r) for r in rows]))
+            print(f"wrote {args.sheet}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
