@@ -47,6 +47,11 @@ def prefetched(items: Iterable[T], depth: int = 2) -> Iterator[T]:
     """
     if depth < 1:
         raise ValueError(f"depth must be >= 1, got {depth}")
+    return _read_ahead(items, depth)
+
+
+def _read_ahead(items: Iterable[T], depth: int) -> Iterator[T]:
+    """:func:`prefetched`'s generator (the reader thread starts with the first ``next``)."""
     ready: queue.Queue = queue.Queue(maxsize=depth)
     stop = threading.Event()
 

@@ -62,4 +62,4 @@ def test_prefetched_stops_the_reader_and_closes_the_source_when_the_consumer_lea
 def test_prefetched_empty_source_and_bad_depth():
     assert list(prefetched(iter([]))) == []
     with pytest.raises(ValueError, match="depth must be >= 1"):
-        list(prefetched(iter([1]), depth=0))
+        prefetched(iter([1]), depth=0)  # at the call, not at the first item
