@@ -432,12 +432,7 @@ def hand_ends(
         & (12.0 * minor >= min_width**2)
         & (count >= arm_length_rel * body_heights_px * min_width)
     )
-    if not arm.any():
-        return out
-    # point each arm's axis away from its silhouette's shoulder point
-    away = np.einsum("bi,bi->b", centroids_px - shoulders_px, axis)
-    axis *= np.where(away < 0, -1.0, 1.0)[:, None]
-    if arm_zone:
+    if arm_zone and arm.any():
         # a face with its neck or an ear with its neck, seen from the side or behind, is as long
         # and thin as a forearm, and so is a shin in skin-coloured trousers: a forearm lies
         # between the head and the shins, or beside the head when raised (one raised in front
@@ -453,6 +448,11 @@ def hand_ends(
         )
         arm &= below_face | beside_head
         arm &= bottom < silhouette_top + KNEE_REL * body_heights_px
+    if not arm.any():
+        return out
+    # point each arm's axis away from its silhouette's shoulder point
+    away = np.einsum("bi,bi->b", centroids_px - shoulders_px, axis)
+    axis *= np.where(away < 0, -1.0, 1.0)[:, None]
     t = np.einsum("pi,pi->p", d, axis[blob_of])
     tip = np.full(n, -np.inf)
     np.maximum.at(tip, blob_of, t)
