@@ -2416,6 +2416,15 @@ class MultiTargetTracker:
         modes, vel = a.split_m, a.split_vel_mps
         if modes is None or vel is None:
             return
+        log.debug(
+            "t%d / t%d modes %s, %.2f m apart, gained %.2f m in %d frame sets",
+            a.id,
+            b.id,
+            modes.round(3).tolist(),
+            float(np.linalg.norm(modes[1] - modes[0])),
+            a.split_gain_m,
+            a.apart_frames,
+        )
         heads = self._owner_heads(a, b)
         margin = self.cfg.labelling.owner_margin_m
         by_owner = (

@@ -1,0 +1,162 @@
+"""Every separation of a combined pair in a run, judged against the ground truth.
+
+    python benchmarks/partings.py [--out out/bench_synth] [--seeds 0] [--config TOML]
+        [--rerun] [--list] [NAME ...]
+
+Reads ``out/bench_synth/<name>[.<config stem>].seed<N>.mcap`` (written by
+``benchmarks/pipeline_bench.py``; run here when missing or with ``--rerun``) and the ground
+truth. A parting is a frame set in which two trackers that were combined in the previous one
+(the same estimate) both leave the combined phase (not lost); their estimates then are the
+modes they took. Each is judged:
+
+- ``kept``: both modes lie within ``--radius`` of true limbs, two different ones, and each
+  tracker took the limb it followed before the pair joined (its nearest true limb in its
+  last frame set outside the pair);
+- ``swapped``: both on true limbs, but the trackers took each other's (or another) limb;
+- ``ghost``: a mode is off every true limb (a candidate where no limb is: the pair parted
+  onto something that was not one of its targets), or both modes are on one limb.
+
+Ghost partings are what the tracker's separation rules are about (docs/tracking.md,
+"Separation"); ``--list`` prints each parting: time, trackers, the limb and distance of each
+mode.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+
+from surveil.datatypes import Phase
+from surveil.io.ground_truth import GroundTruth, load_ground_truth
+from surveil.io.mcap_reader import RunData, read_run
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from pipeline_bench import add_run_arguments, parse_seeds, run_of, scene_names  # noqa: E402
+
+VERDICTS = ("kept", "swapped", "ghost")
+
+
+def _nearest_limb(gt: GroundTruth, t_ns: int, point_m: np.ndarray) -> tuple[int, float]:
+    """Index and distance (m) of the true limb nearest ``point_m`` at the ground-truth frame
+    nearest ``t_ns``."""
+    f = int(np.argmin(np.abs(gt.t_ns - t_ns)))
+    d = np.linalg.norm(gt.positions_m[f] - point_m, axis=1)
+    d = np.where(np.isfinite(d), d, np.inf)
+    k = int(np.argmin(d))
+    return k, float(d[k])
+
+
+def partings(gt: GroundTruth, run: RunData, radius_m: float) -> list[dict]:
+    """Every parting of the run (see the module docstring), oldest first."""
+    combined = Phase.COMBINED.code
+    lost = Phase.LOST.code
+    frame, tracker = run.target_frame, run.target_tracker
+    state, pos = run.target_state, run.target_pos_m
+    row_of = {(int(f), int(t)): r for r, (f, t) in enumerate(zip(frame, tracker, strict=True))}
+    out = []
+    for f in np.unique(frame):
+        prev = [
+            r for r in np.flatnonzero(frame == f - 1) if state[r] == combined
+        ]  # combined in the previous frame set
+        leaving = []
+        for r in prev:
+            now = row_of.get((int(f), int(tracker[r])))
+            if now is not None and state[now] not in (combined, lost):
+                leaving.append((r, now))
+        done: set[int] = set()
+        for i, (ra, na) in enumerate(leaving):
+            for rb, nb in leaving[i + 1 :]:
+                if ra in done or rb in done or np.linalg.norm(pos[ra] - pos[rb]) > 1e-3:
+                    continue
+                done.update((ra, rb))
+                t_ns = int(run.frame_t_ns[f])
+                modes = [_nearest_limb(gt, t_ns, pos[n]) for n in (na, nb)]
+                before = [_before_limb(gt, run, int(tracker[r]), int(f)) for r in (ra, rb)]
+                on_limbs = all(d <= radius_m for _, d in modes) and modes[0][0] != modes[1][0]
+                if not on_limbs:
+                    verdict = "ghost"
+                elif all(b == m[0] for b, m in zip(before, modes, strict=True)):
+                    verdict = "kept"
+                else:
+                    verdict = "swapped"
+                out.append(
+                    {
+                        "t_s": (t_ns - int(run.frame_t_ns[0])) * 1e-9,
+                        "trackers": (int(tracker[ra]), int(tracker[rb])),
+                        "modes": modes,
+                        "before": before,
+                        "verdict": verdict,
+                    }
+                )
+    return out
+
+
+def _before_limb(gt: GroundTruth, run: RunData, tid: int, frame: int) -> int | None:
+    """The true limb nearest tracker ``tid`` in its last frame set before ``frame`` outside a
+    combined pair (None if it has none)."""
+    mine = np.flatnonzero(
+        (run.target_tracker == tid)
+        & (run.target_frame < frame)
+        & (run.target_state != Phase.COMBINED.code)
+        & (run.target_state != Phase.LOST.code)
+    )
+    if not len(mine):
+        return None
+    last = mine[np.argmax(run.target_frame[mine])]
+    return _nearest_limb(gt, int(run.frame_t_ns[run.target_frame[last]]), run.target_pos_m[last])[
+        0
+    ]
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_run_arguments(parser)
+    parser.add_argument(
+        "--seeds", type=parse_seeds, default=None, help="e.g. 0-2 (default --seed)"
+    )
+    parser.add_argument("--radius", type=float, default=0.12, help="on a limb within this, m")
+    parser.add_argument("--list", action="store_true", help="print every parting")
+    args = parser.parse_args(argv)
+    seeds = args.seeds or [args.seed]
+    rows, listing = [], []
+    totals: Counter = Counter()
+    for name in scene_names(args):
+        counts: Counter = Counter()
+        for seed in seeds:
+            args.seed = seed
+            mcap = run_of(name, args)
+            gt = load_ground_truth(args.out / name)
+            for p in partings(gt, read_run(mcap), args.radius):
+                counts[p["verdict"]] += 1
+                (a, da), (b, db) = p["modes"]
+                ta, tb = p["trackers"]
+                listing.append(
+                    f"| {name} | {seed} | {p['t_s']:.2f} | t{ta} / t{tb} "
+                    f"| {gt.labels[a]} {1000 * da:.0f} | {gt.labels[b]} {1000 * db:.0f} "
+                    f"| {p['verdict']} |"
+                )
+        totals.update(counts)
+        n = sum(counts.values())
+        rows.append(f"| {name} | {n} | " + " | ".join(str(counts[v]) for v in VERDICTS) + " |")
+    print(f"seeds {', '.join(map(str, seeds))}, a mode on a limb within {args.radius:.2f} m\n")
+    print("| scenario | partings | " + " | ".join(VERDICTS) + " |")
+    print("|---|---|" + "---|" * len(VERDICTS))
+    print("\n".join(rows))
+    n = sum(totals.values())
+    print(f"| all | {n} | " + " | ".join(str(totals[v]) for v in VERDICTS) + " |")
+    if args.list:
+        print(
+            "\n| scenario | seed | t s | trackers | mode 1: limb mm | mode 2: limb mm | verdict |"
+        )
+        print("|---|---|---|---|---|---|---|")
+        print("\n".join(listing))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
