@@ -41,33 +41,6 @@ def gauss_term(x: np.ndarray, sigma: float) -> np.ndarray:
     return np.where(np.isfinite(x), g, 0.0)
 
 
-def size_prior(
-    size_a_m: np.ndarray,
-    size_b_m: np.ndarray,
-    floor_m: float,
-    sigma_m: float,
-    ratio_free: float,
-    sigma_log_ratio: float,
-) -> np.ndarray:
-    """p_s of blob pairs from the sizes their two blobs imply at Z (sqrt(area) * depth / focal
-    length, m): a Gaussian fall-off of the smaller size below ``floor_m`` (0: none) times one
-    of the log size ratio beyond ``ratio_free`` (0: none). Not in the paper.
-
-    >>> a, b = np.array([0.08, 0.03, 0.08]), np.array([0.07, 0.08, 0.24])
-    >>> size_prior(a, b, 0.05, 0.01, 2.0, 0.4).round(3).tolist()
-    [1.0, 0.104, 0.598]
-    """
-    small = np.minimum(size_a_m, size_b_m)
-    p = np.ones(len(small))
-    if floor_m > 0:
-        p *= gauss_term(np.maximum(floor_m - small, 0.0), sigma_m)
-    if ratio_free > 0:
-        with np.errstate(divide="ignore", invalid="ignore"):
-            log_ratio = np.log(np.maximum(size_a_m, size_b_m) / small)
-        p *= gauss_term(np.maximum(log_ratio - np.log(ratio_free), 0.0), sigma_log_ratio)
-    return p
-
-
 def floor_relative_v(
     points_m: np.ndarray, cams: np.ndarray, v_px: np.ndarray, top_px: np.ndarray, rig: Rig
 ) -> np.ndarray:
@@ -566,26 +539,6 @@ def with_crowns(
     )
 
 
-def _implied_sizes(
-    ia: np.ndarray,
-    ib: np.ndarray,
-    cam_all: np.ndarray,
-    blob_scale: np.ndarray,
-    projected: Mapping[int, tuple[np.ndarray, np.ndarray]],
-) -> tuple[np.ndarray, np.ndarray]:
-    """The sizes (m) that the two blobs of each pair (global blob indices ``ia``, ``ib``)
-    imply at their point: ``blob_scale`` (sqrt(area) / focal length) times the point's depth
-    in the blob's camera (``projected``: :func:`project_into` of the pairs' points)."""
-    rows = np.arange(len(ia))
-    depth = np.full((len(ia), max(projected) + 1), np.nan)
-    for m, (_, z) in projected.items():
-        depth[:, m] = z
-    return (
-        blob_scale[ia] * depth[rows, cam_all[ia]],
-        blob_scale[ib] * depth[rows, cam_all[ib]],
-    )
-
-
 def _skin_candidates(
     by_cam: dict[int, CameraObservation],
     rig: Rig,
@@ -615,14 +568,6 @@ def _skin_candidates(
     rows_all = np.concatenate(rows)
     cam_all = np.concatenate(cam_of)
     blob_all = np.concatenate(blob_of)
-    # a blob's size per metre of depth: sqrt(area) / focal length
-    blob_areas_m = np.concatenate(
-        [
-            np.sqrt(by_cam[m].blobs.areas_px)
-            / np.sqrt(rig.cameras[m].K[0, 0] * rig.cameras[m].K[1, 1])
-            for m in seen
-        ]
-    )
     starts = np.cumsum([0] + [len(d) for d in dirs])
 
     # eq. 18: every blob pair of every camera pair m < m' (global blob indices ia, ib)
@@ -707,18 +652,7 @@ def _skin_candidates(
         points, rig, by_cam, cfg.sigma_silhouette_px, cfg.silhouette_drop_worst, projected
     )
     prior = p_o * p_t * p_b  # eq. 19
-    ok = p_b >= cfg.term_threshold
-    if cfg.size_floor_m > 0 or cfg.size_ratio_free > 0:
-        p_s = size_prior(
-            *_implied_sizes(ia, ib, cam_all, blob_areas_m, projected),
-            cfg.size_floor_m,
-            cfg.sigma_size_m,
-            cfg.size_ratio_free,
-            cfg.sigma_log_size_ratio,
-        )
-        prior = prior * p_s
-        ok &= p_s >= cfg.term_threshold
-    ok &= prior >= threshold
+    ok = (p_b >= cfg.term_threshold) & (prior >= threshold)
     ia, ib, points, half_gap, prior = ia[ok], ib[ok], points[ok], half_gap[ok], prior[ok]
     if len(points) == 0:
         return _empty()

@@ -136,27 +136,6 @@ class CandidateConfig:
         "failed background model must not veto every candidate); off: it raised false "
         "candidates on the demo from 4.4 to 6.3 per frame set for no recall",
     )
-    size_floor_m: float = setting(
-        0.0,
-        "p_s, not in the paper (docs/candidates.md, 'Blob sizes'): a blob pair whose smaller "
-        "blob, scaled to metres at Z's depth (sqrt(area) * depth / focal length), is below "
-        "this is weakened (specks of skin colour on clothing pair into ghosts; a hand is "
-        "6-10 cm); 0 = off, m",
-        min=0.0,
-    )
-    sigma_size_m: float = setting(
-        0.01, "p_s width below size_floor_m: std of the shortfall, m", min=1e-6
-    )
-    size_ratio_free: float = setting(
-        0.0,
-        "p_s: a blob pair whose two blobs, scaled to metres at Z's depth, differ in size by "
-        "more than this factor is weakened (a head's blob paired with a hand's, a speck with "
-        "a limb); 0 = off",
-        min=0.0,
-    )
-    sigma_log_size_ratio: float = setting(
-        0.4, "p_s width above size_ratio_free: std of the excess log size ratio", min=1e-6
-    )
     term_threshold: float = setting(
         0.1, "each of p_o, p_t, p_b must reach this (paper: 0.1)", min=0.0, max=1.0
     )

@@ -22,7 +22,6 @@ from surveil.recon.candidates import (
     refine_from_views,
     rescue_expected,
     silhouette_prior,
-    size_prior,
     view_support,
 )
 from surveil.recon.settings import CandidateConfig
@@ -72,7 +71,6 @@ def _observation(
     silhouette_at_m: np.ndarray | None = None,
     foreground_share: np.ndarray | None = None,
     restored: np.ndarray | None = None,
-    areas_px: np.ndarray | None = None,
 ) -> CameraObservation:
     """Blobs at the projections of ``points_m``; silhouettes are disks around the projections
     of ``silhouette_at_m`` (default: the blob points). rel_v defaults to a function of height,
@@ -84,7 +82,7 @@ def _observation(
     rel = (2.0 - points_m[:, 2]) / 2.0 if rel_v is None else np.asarray(rel_v, np.float64)
     blobs = BlobSet(
         centroids_px=px,
-        areas_px=np.full(n, 50, np.int64) if areas_px is None else np.asarray(areas_px, np.int64),
+        areas_px=np.full(n, 50, np.int64),
         bboxes_px=np.zeros((n, 4), np.int32),
         silhouette=np.ones(n, np.int32),
         rel_v=rel,
@@ -264,52 +262,6 @@ def test_mismatched_relative_v_makes_p_o_small():
     obs[1] = _observation(rig.cameras[1], HEAD, rel_v=np.array([0.35]))
     cs = make_candidates(obs, rig, SIL_BOTTOM)
     np.testing.assert_allclose(cs.prior, [np.exp(-0.5 * (0.15 / CFG.sigma_rel_v) ** 2)])
-
-
-def _area_of(cam: Camera, point_m: np.ndarray, size_m: float) -> int:
-    """The area (px) of a square blob of side ``size_m`` at ``point_m`` seen by ``cam``."""
-    depth = float(cam.to_cam(point_m.reshape(1, 3))[0, 2])
-    return round((size_m * np.sqrt(cam.K[0, 0] * cam.K[1, 1]) / depth) ** 2)
-
-
-@pytest.mark.parametrize(
-    ("size_0_m", "size_1_m", "expect"),
-    [(0.08, 0.08, 1.0), (0.08, 0.02, None), (0.08, 0.24, None), (0.06, 0.06, 1.0)],
-)
-def test_p_s_weakens_a_speck_or_a_mismatched_pair_and_not_two_hand_sized_blobs(
-    size_0_m, size_1_m, expect
-):
-    """A hand-sized blob paired with a speck (skin-coloured clothing) or with a blob three
-    times its size (a head) loses prior by p_s; two blobs of one hand keep theirs. The blobs'
-    areas are given in pixels, so the term must scale them by depth and focal length."""
-    rig = _rig(2)
-    hand = np.array([[2.5, 1.8, 1.0]])
-    areas = [_area_of(rig.cameras[k], hand[0], s) for k, s in enumerate((size_0_m, size_1_m))]
-    obs = [_observation(rig.cameras[k], hand, areas_px=[areas[k]]) for k in range(2)]
-    off = make_candidates(obs, rig, CFG)
-    on_cfg = dataclasses.replace(CFG, size_floor_m=0.05, size_ratio_free=2.0)
-    on = make_candidates(obs, rig, on_cfg)
-    assert len(off.points_m) == 1
-    want = size_prior(np.array([size_0_m]), np.array([size_1_m]), 0.05, 0.01, 2.0, 0.4)[0]
-    if expect is not None:
-        assert want == pytest.approx(expect)
-    else:
-        assert want < 0.7
-    if off.prior[0] * want < CFG.prior_threshold:
-        assert len(on.points_m) == 0
-    else:
-        # the blob areas are whole pixels: sizes within a few per cent of those asked
-        np.testing.assert_allclose(on.prior, off.prior * want, rtol=0.06)
-
-
-def test_size_prior_is_one_when_off_and_falls_with_the_shortfall_and_the_ratio():
-    a = np.array([0.08, 0.045, 0.04, 0.08, 0.08])
-    b = np.array([0.08, 0.08, 0.08, 0.16, 0.32])
-    assert size_prior(a, b, 0.0, 0.01, 0.0, 0.4).tolist() == [1.0] * 5
-    p = size_prior(a, b, 0.05, 0.01, 2.0, 0.4)
-    assert p[0] == 1.0 and p[3] == 1.0  # hand-sized, and within the free ratio
-    assert 1.0 > p[1] > p[2]  # further below the floor
-    assert p[4] < p[3]  # four times the size
 
 
 def test_a_weak_candidate_is_kept_only_next_to_a_tracked_hand():
