@@ -1039,6 +1039,39 @@ def test_a_pair_out_of_one_owners_reach_gives_that_owner_the_candidate_at_its_si
         assert after[label].phase is Phase.NORMAL
 
 
+@pytest.mark.parametrize("hand_from", [4, 5])
+def test_out_of_reach_the_left_hand_takes_a_seed_seen_twice_before_a_nearer_one_seen_once(
+    rig, rng, hand_from
+):
+    """As above, but a ghost shows once, in the frame set of the out-of-reach test, a little
+    nearer where the hands met than a's hand at a's side (three_people at 9.93 s, five of
+    seeds 0-5: the ghost 27 cm from the meeting point, the hand, seen twice, 29 cm). Seen
+    from the frame set before (``hand_from`` 4), a's hand is the stronger evidence and a's
+    tracker takes it; seen once like the ghost, the nearer one is taken."""
+    frames, a, b, meet = shaking_hands(hold=6)
+    home_b = [meet + u * (b["right_hand"] - meet) for u in np.linspace(0, 1, 7)[1:]]
+    n_before = len(frames)
+    d_hand = float(np.linalg.norm(a["right_hand"] - meet))
+    ghost = meet + (d_hand - 0.03) * np.array([0.0, 0.6, 0.8])  # above and beside a's side
+    for k, rb in enumerate(home_b + [home_b[-1]] * 20):
+        pts = [*_head_and_left(a), *_head_and_left(b), rb]
+        if k >= hand_from:
+            pts.append(a["right_hand"])
+        if k == 5:
+            pts.append(ghost)
+        frames.append(pts)
+    out = run(MultiTargetTracker(TrackingConfig(), rig, seed=11), frames, rng)
+    splits = [i for i, f in enumerate(out) for t in f.transitions if t.old is Phase.COMBINED]
+    assert splits == [n_before + 5] * 2  # the frame set of the out-of-reach test
+    parted = {t.target_id: t.position_m for t in out[n_before + 5].transitions}
+    took_hand = [np.linalg.norm(p - a["right_hand"]) < 0.05 for p in parted.values()]
+    took_ghost = [np.linalg.norm(p - ghost) < 0.05 for p in parted.values()]
+    if hand_from == 4:
+        assert any(took_hand) and not any(took_ghost)
+    else:
+        assert any(took_ghost) and not any(took_hand)
+
+
 @pytest.mark.parametrize(
     "ghost",
     [
