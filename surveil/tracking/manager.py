@@ -56,6 +56,10 @@ HISTORY_FRAMES = 30  # estimates kept per tracker (for the angle rule's "before"
 # how long unexplained candidates are remembered (the parting test looks back to a pair's
 # joining; pairs held longer than this are not checked against ghosts seen as they joined)
 UNEXPLAINED_LOG_S = 10.0
+# the hand left behind by an out-of-reach pair (_seed_of_left_hand): a seed seen in one frame
+# set only counts as this much farther from where the pair joined (a one-frame ghost beside
+# the hand's own seed, seen twice), m
+SEEN_ONCE_PENALTY_M = 0.1
 
 
 # per-frame decay of the facing evidence of the last few frames (about 5), against which
@@ -1383,9 +1387,10 @@ class MultiTargetTracker:
         """Index of the seed not in ``used`` nearest ``joined_m`` (where the pair joined) that
         is within ``arm_reach_m`` of ``head_m`` and ``separate_distance_m`` or more from the
         pair's estimate ``pair_m``; None if there is none (:meth:`_split_out_of_reach`).
-        Seeds seen in two or more consecutive frame sets come first: three_people at 9.93 s
-        (five of seeds 0-5), the hand left behind had a seed seen twice 29 cm from where the
-        pair joined, and a ghost seen once 27 cm from it took its place."""
+        A seed seen in one frame set only counts as ``SEEN_ONCE_PENALTY_M`` farther: in
+        three_people at 9.93 s (five of seeds 0-5), the hand left behind had a seed seen twice
+        29 cm from where the pair joined, and a ghost seen once 27 cm from it took its place.
+        (Preferring any seed seen twice, however far, gave seed 5 a ghost 36 cm from the hand.)"""
         free = [k for k in range(len(seeds)) if k not in used]
         if not free:
             return None
@@ -1397,8 +1402,7 @@ class MultiTargetTracker:
             return None
         d = np.where(ok, np.linalg.norm(at - joined_m, axis=1), np.inf)
         once = np.array([seeds[k].seen < 2 for k in free])
-        if (ok & ~once).any():
-            d[once] = np.inf
+        d[once] += SEEN_ONCE_PENALTY_M
         return free[int(np.argmin(d))]
 
     def _owner_heads(self, a: _Track, b: _Track) -> np.ndarray | None:
