@@ -32,7 +32,7 @@ from surveil.io.mcap_reader import read_run
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
-from pipeline_bench import add_run_arguments, run_of, scene_names  # noqa: E402
+from pipeline_bench import add_run_arguments, print_kind_counts, run_of, scene_names  # noqa: E402
 
 KINDS = ("not re-acquired", "taken over", "drifted")
 
@@ -58,18 +58,16 @@ def main(argv: list[str] | None = None) -> int:
             f"| {sw.unmatched_s:.2f} | {sw.from_phase} | {sw.to_age_s:.2f} | {sw.kind} |"
             for sw in sorted(switches, key=lambda sw: sw.t_s)
         ]
-    print("| scenario | switches | " + " | ".join(KINDS) + " |")
-    print("|---|---|" + "---|" * len(KINDS))
-    print("\n".join(rows))
-    total = sum(totals.values())
-    print(f"| all | {total} | " + " | ".join(str(totals[k]) for k in KINDS) + " |")
-    if args.list:
-        print(
-            "\n| scenario | t s | true limb | trackers | unmatched s | old phase | new age s "
-            "| kind |"
-        )
-        print("|---|---|---|---|---|---|---|---|")
-        print("\n".join(listing))
+    print_kind_counts(
+        "switches",
+        KINDS,
+        rows,
+        totals,
+        "scenario | t s | true limb | trackers | unmatched s | old phase | new age s | kind"
+        if args.list
+        else None,
+        listing,
+    )
     return 0
 
 

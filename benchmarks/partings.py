@@ -36,7 +36,13 @@ from surveil.io.mcap_reader import RunData, read_run
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
-from pipeline_bench import add_run_arguments, parse_seeds, run_of, scene_names  # noqa: E402
+from pipeline_bench import (  # noqa: E402
+    add_run_arguments,
+    parse_seeds,
+    print_kind_counts,
+    run_of,
+    scene_names,
+)
 
 VERDICTS = ("kept", "swapped", "ghost")
 
@@ -144,17 +150,16 @@ def main(argv: list[str] | None = None) -> int:
         n = sum(counts.values())
         rows.append(f"| {name} | {n} | " + " | ".join(str(counts[v]) for v in VERDICTS) + " |")
     print(f"seeds {', '.join(map(str, seeds))}, a mode on a limb within {args.radius:.2f} m\n")
-    print("| scenario | partings | " + " | ".join(VERDICTS) + " |")
-    print("|---|---|" + "---|" * len(VERDICTS))
-    print("\n".join(rows))
-    n = sum(totals.values())
-    print(f"| all | {n} | " + " | ".join(str(totals[v]) for v in VERDICTS) + " |")
-    if args.list:
-        print(
-            "\n| scenario | seed | t s | trackers | mode 1: limb mm | mode 2: limb mm | verdict |"
-        )
-        print("|---|---|---|---|---|---|---|")
-        print("\n".join(listing))
+    print_kind_counts(
+        "partings",
+        VERDICTS,
+        rows,
+        totals,
+        "scenario | seed | t s | trackers | mode 1: limb mm | mode 2: limb mm | verdict"
+        if args.list
+        else None,
+        listing,
+    )
     return 0
 
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from contextlib import AbstractContextManager, nullcontext
 from pathlib import Path
 
@@ -183,6 +183,28 @@ def run_of(name: str, args: argparse.Namespace) -> Path:
     if args.rerun or not mcap.exists():
         bench(name, args.out, args.seed, args.config)
     return mcap
+
+
+def print_kind_counts(
+    what: str,
+    kinds: tuple[str, ...],
+    rows: list[str],
+    totals: Mapping[str, int],
+    listing_header: str | None = None,
+    listing: Sequence[str] = (),
+) -> None:
+    """A Markdown table of counts by kind per scenario (``rows``, already formatted), its
+    total row from ``totals``, and, with ``listing_header`` (its columns, ``"a | b"``),
+    the ``listing`` rows under it: the summary of ``id_switches.py`` and ``partings.py``."""
+    print(f"| scenario | {what} | " + " | ".join(kinds) + " |")
+    print("|---|---|" + "---|" * len(kinds))
+    print("\n".join(rows))
+    total = sum(totals.get(k, 0) for k in kinds)
+    print(f"| all | {total} | " + " | ".join(str(totals.get(k, 0)) for k in kinds) + " |")
+    if listing_header is not None:
+        print(f"\n| {listing_header} |")
+        print("|" + "---|" * (listing_header.count("|") + 1))
+        print("\n".join(listing))
 
 
 def main(argv: list[str] | None = None) -> int:
