@@ -134,18 +134,26 @@ def screenshot(
         )
     try:
         client = _connect(ViewerClient, port, proc, timeout_s, logfile)
-        client.open(str(path))
-        deadline = time.monotonic() + timeout_s
-        while client.get_state().loading:
-            if time.monotonic() > deadline:
-                raise ViewerError(f"viewer still loading {path} after {timeout_s:.0f} s")
-            time.sleep(0.2)
-        if at_s is not None:
-            client.set_time("time", duration=float(at_s), play_state="paused")
-        else:
-            client.set_time(play_state="following")
-        time.sleep(settle_s)
-        client.save_screenshot(str(png))
+        try:
+            client.open(str(path))
+            deadline = time.monotonic() + timeout_s
+            while client.get_state().loading:
+                if time.monotonic() > deadline:
+                    raise ViewerError(f"viewer still loading {path} after {timeout_s:.0f} s")
+                time.sleep(0.2)
+            if at_s is not None:
+                client.set_time("time", duration=float(at_s), play_state="paused")
+            else:
+                client.set_time(play_state="following")
+            time.sleep(settle_s)
+            client.save_screenshot(str(png))
+        except ConnectionError as exc:
+            # without a Vulkan driver the viewer answers, then dies as it opens a window
+            try:
+                proc.wait(timeout=5.0)
+            except subprocess.TimeoutExpired:
+                raise ViewerError(f"lost the rerun viewer on port {port}: {exc}") from None
+            raise _exited(proc, logfile, f"while opening {path}") from None
     finally:
         stop_process_group(proc)
     if not png.is_file():
@@ -175,17 +183,22 @@ def stop_process_group(proc: subprocess.Popen, timeout_s: float = 10.0) -> None:
         proc.wait()
 
 
+def _exited(proc: subprocess.Popen, logfile: Path, when: str) -> ViewerError:
+    """The error for a viewer process that has exited (``when``: what it was doing), with
+    the end of its log."""
+    tail = logfile.read_text(errors="replace")[-2000:]
+    return ViewerError(
+        f"the rerun viewer exited with code {proc.returncode} {when} (no Vulkan driver? on "
+        f"Debian: apt-get install mesa-vulkan-drivers libvulkan1):\n{tail}"
+    )
+
+
 def _connect(client_cls, port: int, proc: subprocess.Popen, timeout_s: float, logfile: Path):
     """Wait until the headless viewer answers on ``port``."""
     deadline = time.monotonic() + timeout_s
     while True:
         if proc.poll() is not None:
-            tail = logfile.read_text(errors="replace")[-2000:]
-            raise ViewerError(
-                f"the rerun viewer exited with code {proc.returncode} before answering "
-                f"(no Vulkan driver? on Debian: apt-get install mesa-vulkan-drivers "
-                f"libvulkan1):\n{tail}"
-            )
+            raise _exited(proc, logfile, "before answering")
         try:
             client = client_cls.connect(f"rerun+http://127.0.0.1:{port}/proxy")
             client.get_state()

@@ -46,3 +46,35 @@ def test_stopping_an_exited_process_is_harmless():
     proc.wait()
     stop_process_group(proc, timeout_s=1.0)
     assert proc.returncode == 0
+
+
+class _ClientThatLosesTheViewer:
+    """A ViewerClient whose viewer answers once and is gone when asked to open a file (the
+    viewer without a Vulkan driver: it dies as it opens its window)."""
+
+    @classmethod
+    def connect(cls, url: str) -> _ClientThatLosesTheViewer:
+        return cls()
+
+    def get_state(self) -> object:
+        return object()
+
+    def open(self, path: str) -> None:
+        raise ConnectionError("transport error")
+
+
+@pytest.mark.skipif(os.name != "posix", reason="a shell script stands in for the viewer")
+def test_a_viewer_that_dies_while_opening_the_file_is_a_viewer_error(tmp_path, monkeypatch):
+    """The message says the viewer exited (the screenshot test skips on that outside CI) and
+    why it may have: a fresh machine without Vulkan got a bare ConnectionError instead."""
+    import rerun.experimental
+
+    from surveil.viz import viewer
+
+    fake = tmp_path / "rerun"
+    fake.write_text("#!/bin/sh\nsleep 1\nexit 3\n")
+    fake.chmod(0o755)
+    monkeypatch.setattr(viewer, "rerun_executable", lambda: str(fake))
+    monkeypatch.setattr(rerun.experimental, "ViewerClient", _ClientThatLosesTheViewer)
+    with pytest.raises(viewer.ViewerError, match="exited with code 3 while opening .*Vulkan"):
+        viewer.screenshot(tmp_path / "x.rrd", tmp_path / "x.png", timeout_s=10.0)
