@@ -24,8 +24,10 @@ mode.
 from __future__ import annotations
 
 import argparse
+import itertools
 import sys
-from collections import Counter
+from collections import Counter, defaultdict
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -57,48 +59,45 @@ def _nearest_limb(gt: GroundTruth, t_ns: int, point_m: np.ndarray) -> tuple[int,
     return k, float(d[k])
 
 
-def partings(gt: GroundTruth, run: RunData, radius_m: float) -> list[dict]:
+@dataclass(frozen=True)
+class Parting:
+    """One parting: when (s from the first frame set), the two trackers, the true limb
+    nearest each one's mode with its distance (m), and the verdict (``VERDICTS``)."""
+
+    t_s: float
+    trackers: tuple[int, int]
+    modes: tuple[tuple[int, float], tuple[int, float]]
+    verdict: str
+
+
+def partings(gt: GroundTruth, run: RunData, radius_m: float) -> list[Parting]:
     """Every parting of the run (see the module docstring), oldest first."""
-    combined = Phase.COMBINED.code
-    lost = Phase.LOST.code
+    combined, lost = Phase.COMBINED.code, Phase.LOST.code
     frame, tracker = run.target_frame, run.target_tracker
     state, pos = run.target_state, run.target_pos_m
     row_of = {(int(f), int(t)): r for r, (f, t) in enumerate(zip(frame, tracker, strict=True))}
+    # frame set -> (row in the pair, row outside it) of each tracker that left a pair there
+    leaving: dict[int, list[tuple[int, int]]] = defaultdict(list)
+    for r in np.flatnonzero(state == combined):
+        now = row_of.get((int(frame[r]) + 1, int(tracker[r])))
+        if now is not None and state[now] not in (combined, lost):
+            leaving[int(frame[r]) + 1].append((int(r), now))
     out = []
-    for f in np.unique(frame):
-        prev = [
-            r for r in np.flatnonzero(frame == f - 1) if state[r] == combined
-        ]  # combined in the previous frame set
-        leaving = []
-        for r in prev:
-            now = row_of.get((int(f), int(tracker[r])))
-            if now is not None and state[now] not in (combined, lost):
-                leaving.append((r, now))
-        done: set[int] = set()
-        for i, (ra, na) in enumerate(leaving):
-            for rb, nb in leaving[i + 1 :]:
-                if ra in done or rb in done or np.linalg.norm(pos[ra] - pos[rb]) > 1e-3:
-                    continue
-                done.update((ra, rb))
-                t_ns = int(run.frame_t_ns[f])
-                modes = [_nearest_limb(gt, t_ns, pos[n]) for n in (na, nb)]
-                before = [_before_limb(gt, run, int(tracker[r]), int(f)) for r in (ra, rb)]
-                on_limbs = all(d <= radius_m for _, d in modes) and modes[0][0] != modes[1][0]
-                if not on_limbs:
-                    verdict = "ghost"
-                elif all(b == m[0] for b, m in zip(before, modes, strict=True)):
-                    verdict = "kept"
-                else:
-                    verdict = "swapped"
-                out.append(
-                    {
-                        "t_s": (t_ns - int(run.frame_t_ns[0])) * 1e-9,
-                        "trackers": (int(tracker[ra]), int(tracker[rb])),
-                        "modes": modes,
-                        "before": before,
-                        "verdict": verdict,
-                    }
-                )
+    for f in sorted(leaving):
+        t_ns = int(run.frame_t_ns[f])
+        for (ra, na), (rb, nb) in itertools.combinations(leaving[f], 2):
+            if np.linalg.norm(pos[ra] - pos[rb]) > 1e-3:  # not partners: not one estimate
+                continue
+            modes = (_nearest_limb(gt, t_ns, pos[na]), _nearest_limb(gt, t_ns, pos[nb]))
+            before = [_before_limb(gt, run, int(tracker[r]), f) for r in (ra, rb)]
+            if not all(d <= radius_m for _, d in modes) or modes[0][0] == modes[1][0]:
+                verdict = "ghost"
+            elif before == [m[0] for m in modes]:
+                verdict = "kept"
+            else:
+                verdict = "swapped"
+            t_s = (t_ns - int(run.frame_t_ns[0])) * 1e-9
+            out.append(Parting(t_s, (int(tracker[ra]), int(tracker[rb])), modes, verdict))
     return out
 
 
@@ -114,9 +113,8 @@ def _before_limb(gt: GroundTruth, run: RunData, tid: int, frame: int) -> int | N
     if not len(mine):
         return None
     last = mine[np.argmax(run.target_frame[mine])]
-    return _nearest_limb(gt, int(run.frame_t_ns[run.target_frame[last]]), run.target_pos_m[last])[
-        0
-    ]
+    t_ns = int(run.frame_t_ns[run.target_frame[last]])
+    return _nearest_limb(gt, t_ns, run.target_pos_m[last])[0]
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -138,13 +136,13 @@ def main(argv: list[str] | None = None) -> int:
             mcap = run_of(name, args)
             gt = load_ground_truth(args.out / name)
             for p in partings(gt, read_run(mcap), args.radius):
-                counts[p["verdict"]] += 1
-                (a, da), (b, db) = p["modes"]
-                ta, tb = p["trackers"]
+                counts[p.verdict] += 1
+                (a, da), (b, db) = p.modes
+                ta, tb = p.trackers
                 listing.append(
-                    f"| {name} | {seed} | {p['t_s']:.2f} | t{ta} / t{tb} "
+                    f"| {name} | {seed} | {p.t_s:.2f} | t{ta} / t{tb} "
                     f"| {gt.labels[a]} {1000 * da:.0f} | {gt.labels[b]} {1000 * db:.0f} "
-                    f"| {p['verdict']} |"
+                    f"| {p.verdict} |"
                 )
         totals.update(counts)
         n = sum(counts.values())
