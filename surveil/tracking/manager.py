@@ -1023,6 +1023,7 @@ class MultiTargetTracker:
         lc = self.cfg.lifecycle
         out: set[int] = set()
         parted: set[int] = set()
+        retired: set[int] = set()  # young trackers a pair parted onto (:meth:`_young_hands`)
         # strong seeds, confirmed or not: an unconfirmed one only ever parts a pair together
         # with a confirmed one (:meth:`_both_leaving`)
         free = [i for i, sd in enumerate(seeds) if i not in used and sd.count > 0]
@@ -1060,18 +1061,27 @@ class MultiTargetTracker:
             if not (ok & confirmed).any():
                 continue
             both = None
+            leaving = [free_here[j] for j in np.flatnonzero(ok)]
+            young: list[_Track] = []  # trackers that may be a hand that left (confirmed)
             if head_first is None:
-                both = self._both_leaving(
-                    tr, heads, [seeds[free_here[j]] for j in np.flatnonzero(ok)]
-                )
+                young = [c for c in self._young_hands(tr) if c.id not in retired]
+                options = [seeds[i] for i in leaving] + [
+                    _Pending(c.mean_m, lc.init_confirm_frames, c.vel_mps, c.born_ns) for c in young
+                ]
+                both = self._both_leaving(tr, heads, options)
             if both is not None and self._held(tr):
                 log.debug("t%d / t%d are held where they met: not both leaving", tr.id, other.id)
                 both = None
             fixed: tuple[int | None, int | None] = (None, None)
             if both is not None:
-                picked = [free_here[j] for j in np.flatnonzero(ok)[list(both)]]
-                modes = np.array([seeds[i].position_m for i in picked])
-                vels = np.array([seeds[i].velocity_mps for i in picked])
+                picked = [leaving[k] for k in both if k < len(leaving)]
+                for k in both:
+                    if k >= len(leaving):  # a tracker is the hand: the pair's takes its place
+                        c = young[k - len(leaving)]
+                        log.debug("t%d / t%d part on t%d", tr.id, other.id, c.id)
+                        retired.add(c.id)
+                modes = np.array([options[k].position_m for k in both])
+                vels = np.array([options[k].velocity_mps for k in both])
             else:
                 picked = [free_here[int(np.argmin(np.where(ok & confirmed, d0, np.inf)))]]
                 seed = seeds[picked[0]]
@@ -1085,7 +1095,37 @@ class MultiTargetTracker:
             out.update(picked)
             parted.update((tr.id, other.id))
             log.debug("t%d / t%d part on new candidates at %s", tr.id, other.id, modes)
+        for tid in retired:
+            self._remove(tid)
         return out
+
+    def _young_hands(self, pair: _Track) -> list[_Track]:
+        """Trackers that may be a hand that left the combined pair ``pair``: started after
+        it joined, not typed a head, in no person's slots, on a candidate (one within
+        ``explained_radius_m``: a tracker started on a ghost slides off once the ghost goes,
+        three_people take 101 at 5.8 s), ``separate_distance_m`` or more from the pair and
+        not there as it joined (:meth:`_there_as_pair_joined`).
+
+        A hand that left the pair appears as a new candidate, and its seed can grow into a
+        tracker (typed a hand only a few frame sets later) before the pair parts: handshake,
+        seeds 4 and 5 at 10.07 s, a tracker started on p1's hand going home one frame set
+        before the pair, held between the two people by a ghost, parted onto p2's hand and
+        a ghost by p1's chest. :meth:`_both_leaving` weighs these trackers like seeds."""
+        if pair.joined_ns is None or not len(self._pts):
+            return []
+        lc = self.cfg.lifecycle
+        return [
+            c
+            for c in self._tracks.values()
+            if c.phase is Phase.UNLABELLED
+            and np.linalg.norm(self._pts - c.mean_m, axis=1).min() <= lc.explained_radius_m
+            and c.person == 0
+            and c.is_hand is not False
+            and not c.demoted
+            and c.born_ns > pair.joined_ns
+            and np.linalg.norm(c.mean_m - pair.mean_m) >= lc.separate_distance_m
+            and not self._there_as_pair_joined(pair, c.mean_m, c.born_ns)
+        ]
 
     def _head_and_own_hand(self, a: _Track, b: _Track) -> bool | None:
         """True when ``a`` is a person's head and ``b`` one of that person's hands, False
@@ -1122,7 +1162,8 @@ class MultiTargetTracker:
         hand would get a new tracker. Two seeds on opposite sides of the pair (their
         directions from it more than 90 degrees apart) whose owners can reach them (the
         owner rule, :func:`lab.owner_rule`, for two people's hands) are taken as both
-        targets: the nearest such two."""
+        targets: the nearest such two. Trackers started since the pair joined that may be a
+        hand that left it (:meth:`_young_hands`) come as confirmed seeds where they are."""
         if len(seeds) < 2:
             return None
         reach = self.cfg.labelling.arm_reach_m + self.cfg.labelling.person_margin_m

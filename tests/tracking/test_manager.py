@@ -951,6 +951,34 @@ def test_two_hands_that_leave_a_pair_at_once_both_part_it(rig, rng, b_later, bot
         assert len(on_hands) == 1
 
 
+def test_a_hand_tracked_since_it_left_a_pair_parts_it_before_a_later_ghost(rig, rng):
+    """After a handshake a ghost holds the pair where the hands met, and a stray point 25 cm
+    below it gives the pair two modes that do not move apart. a's hand shows again 48 cm
+    away while the pair counts those modes, so its seed starts a tracker instead of parting
+    the pair (handshake, seeds 4 and 5 at 10.07 s). The stray goes; then b's hand and a
+    ghost by a's chest, on the opposite side, become seeds in the same frame set. The pair
+    must part onto b's hand and a's young tracker (retired, a duplicate), not onto the
+    ghost: each hand keeps its tracker and label."""
+    frames, a, b, meet = shaking_hands(hold=6)
+    n_before = len(frames)
+    unit = lambda v: v / np.linalg.norm(v)  # noqa: E731
+    hand_a = meet + 0.48 * unit(a["right_hand"] - meet)
+    hand_b = meet + 0.49 * unit(b["right_hand"] - meet)
+    ghost = meet + 0.55 * unit(np.array([-0.35, 0.2, 0.35]))
+    for k in range(20):
+        pts = [*_head_and_left(a), *_head_and_left(b), meet]
+        pts += [meet - [0.0, 0.0, 0.25]] if k < 6 else []
+        pts += [hand_a] if k >= 3 else []
+        pts += [hand_b, ghost] if k >= 5 else []
+        frames.append(pts)
+    out = run(MultiTargetTracker(TrackingConfig(), rig, seed=11), frames, rng)
+    before = {s.label: s.target_id for s in out[n_before - 1].targets}
+    after = {s.label: s for s in out[-1].targets}
+    for label, hand in (("p1/right_hand", hand_a), ("p2/right_hand", hand_b)):
+        assert after[label].target_id == before[label]
+        assert np.linalg.norm(after[label].mean_m - hand) < 0.05
+
+
 @pytest.mark.parametrize("held_views", [3, 0])
 def test_a_pair_held_by_a_well_seen_candidate_is_not_left_by_both_hands(rig, rng, held_views):
     """Two points show 49 cm from a handshake's pair on opposite sides, each within its
