@@ -19,8 +19,8 @@ Prints the rows that differ (``--all``: every row), the totals of each side, and
 B's events (matched minus false, per run) and identity switches can be told from A's over
 paired runs: a bootstrap interval of the total difference and a sign test
 (:mod:`surveil.eval.paired`); then, per scene, each side's means over the seeds of tracking
-recall, head and hand error and false targets per frame. Scenes and seeds where either side
-has no run are skipped and counted.
+recall, head and hand error, false targets per frame and label accuracy. Scenes and seeds
+where either side has no run are skipped and counted.
 """
 
 from __future__ import annotations
@@ -46,7 +46,7 @@ from surveil.eval.paired import paired_difference  # noqa: E402
 from surveil.eval.score import EvalConfig, evaluate  # noqa: E402
 
 COLUMNS = ("matched", "false", "switches", "head mm", "hand mm", "false / frame")
-MEANS = ("recall", "head mm", "hand mm", "false / frame")
+MEANS = ("recall", "head mm", "hand mm", "false / frame", "label acc")
 
 
 def _configs(text: str) -> list[Path | None]:
@@ -86,8 +86,8 @@ class Pooled:
 
 def scores(out: Path, name: str, mcap: Path) -> tuple[tuple, Pooled]:
     """(events matched, false events, identity switches, mean head error mm, mean hand error
-    mm, false targets per frame, tracking recall) of one run, and its matched events' climax
-    errors and exchange directions."""
+    mm, false targets per frame, tracking recall, label accuracy) of one run, and its matched
+    events' climax errors and exchange directions."""
     report = evaluate(out / name, mcap, EvalConfig())
     e, t = report.events, report.targets
     row = (
@@ -98,6 +98,7 @@ def scores(out: Path, name: str, mcap: Path) -> tuple[tuple, Pooled]:
         t.hand_error_mm_mean or float("nan"),
         t.false_targets_per_frame or 0.0,
         t.recall or 0.0,
+        t.label_accuracy or 0.0,
     )
     pooled = Pooled(
         [x for a in e.activities for x in a.climax_errors_ms],
@@ -112,9 +113,10 @@ def _cells(row: tuple) -> str:
 
 
 def _means(rows: list[tuple]) -> str:
-    """Cells of MEANS: the mean over runs of recall, head and hand error, false per frame."""
-    m = np.nanmean(np.array([(r[6], r[3], r[4], r[5]) for r in rows], dtype=float), axis=0)
-    return f"{m[0]:.3f} | {m[1]:.1f} | {m[2]:.1f} | {m[3]:.2f}"
+    """Cells of MEANS: the mean over runs of recall, head and hand error, false per frame,
+    label accuracy."""
+    m = np.nanmean(np.array([(r[6], r[3], r[4], r[5], r[7]) for r in rows], dtype=float), axis=0)
+    return f"{m[0]:.3f} | {m[1]:.1f} | {m[2]:.1f} | {m[3]:.2f} | {m[4]:.3f}"
 
 
 def main(argv: list[str] | None = None) -> int:

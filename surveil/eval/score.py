@@ -96,6 +96,7 @@ class TargetMetrics:
     limb_type_accuracy: float | None
     left_right_accuracy: float | None
     person_consistency: float | None
+    label_accuracy: float | None
     person_mapping: dict[str, str]
     id_switches: int
     id_switches_per_min: float | None
@@ -515,6 +516,9 @@ def score_targets(
         limb_type_accuracy=ratio((limb_ok & labelled).sum(), labelled.sum()),
         left_right_accuracy=ratio((hands & (p_limb == t_limb)).sum(), hands.sum()),
         person_consistency=ratio((labelled & (mapped == t_person)).sum(), labelled.sum()),
+        label_accuracy=ratio(
+            (labelled & (mapped == t_person) & (p_limb == t_limb)).sum(), len(labelled)
+        ),
         person_mapping={f"p{k}": f"p{v}" for k, v in sorted(mapping.items())},
         id_switches=total_switches,
         id_switches_per_min=ratio(total_switches, minutes),
@@ -719,6 +723,7 @@ def format_report(report: EvalReport) -> str:
         ("limb type accuracy", _fmt(t.limb_type_accuracy), ""),
         ("left/right accuracy", _fmt(t.left_right_accuracy), ""),
         ("person consistency", _fmt(t.person_consistency), ""),
+        ("label accuracy", _fmt(t.label_accuracy), f"of {t.n_matches} matches"),
         ("identity switches per min", _fmt(t.id_switches_per_min, 2), str(t.id_switches)),
     ]
     rows += [

@@ -190,6 +190,7 @@ def test_ground_truth_mcap_scores_perfectly(rec: Path, rig: Rig, tmp_path: Path)
     assert t.false_targets_per_frame == 0.0
     assert t.labelled_fraction == t.limb_type_accuracy == t.left_right_accuracy == 1.0
     assert t.person_consistency == 1.0 and t.person_mapping == {"p1": "p1", "p2": "p2"}
+    assert t.label_accuracy == 1.0
     assert t.id_switches == 0 and t.id_switches_per_min == 0.0
     assert ev.precision == ev.recall == ev.f1 == 1.0
     scored = {s.activity: s for s in ev.activities}
@@ -261,6 +262,33 @@ def test_tracker_id_swap_mid_run_counts_switches(
     minutes = N_FRAMES / FPS / 60
     assert t.id_switches_per_min == pytest.approx(2 / minutes)
     assert t.id_switches_per_person_per_min == pytest.approx({"p1": 2 / minutes, "p2": 0.0})
+
+
+def test_label_accuracy_asks_for_the_name_on_the_limb_not_the_tracker_id(
+    rec: Path, rig: Rig, gt: GroundTruth, tmp_path: Path
+) -> None:
+    """Two trackers that swap limbs while their labels stay on the right limbs are two
+    identity switches but no wrong label; a limb whose tracker loses its label from frame
+    30 on is wrong in those frames, with no switch."""
+
+    def swap_ids(i: int, tgs: list[TargetSnapshot]) -> list[TargetSnapshot]:
+        swapped = {2: 3, 3: 2} if i >= 30 else {}
+        return [replace(tg, target_id=swapped.get(tg.target_id, tg.target_id)) for tg in tgs]
+
+    t = evaluate(rec, write_prediction(tmp_path / "id.mcap", gt, rig, swap_ids), CFG).targets
+    assert t.id_switches == 2 and t.label_accuracy == 1.0
+
+    def unlabel(i: int, tgs: list[TargetSnapshot]) -> list[TargetSnapshot]:
+        return [
+            replace(tg, person=0, limb=Limb.UNKNOWN, phase=Phase.UNLABELLED)
+            if i >= 30 and tg.target_id == 3
+            else tg
+            for tg in tgs
+        ]
+
+    t = evaluate(rec, write_prediction(tmp_path / "u.mcap", gt, rig, unlabel), CFG).targets
+    assert t.id_switches == 0
+    assert t.label_accuracy == pytest.approx(1 - (N_FRAMES - 30) / t.n_matches)
 
 
 def test_identity_switches_tell_what_became_of_the_old_tracker(
@@ -364,7 +392,7 @@ def test_far_and_unlabelled_targets(rec: Path, rig: Rig, gt: GroundTruth, tmp_pa
         rec, write_prediction(tmp_path / "u.mcap", gt, rig, far_and_unlabelled), CFG
     ).targets
     assert t.recall == 1.0 and t.false_targets_per_frame == 1.0
-    assert t.labelled_fraction == 0.0
+    assert t.labelled_fraction == 0.0 and t.label_accuracy == 0.0
     assert t.limb_type_accuracy is None and t.person_consistency is None
     assert t.person_mapping == {}
 
