@@ -228,7 +228,8 @@ def main(argv: list[str] | None = None) -> int:
             f"{cell(t.head_error_mm_median, 0)} | {cell(t.hand_error_mm_mean, 0)} / "
             f"{cell(t.hand_error_mm_median, 0)} | {cell(t.false_targets_per_frame, 2)} "
             f"| {cell(t.limb_type_accuracy)} | {cell(t.left_right_accuracy)} "
-            f"| {cell(t.person_consistency)} | {cell(t.id_switches_per_min, 1)} | {rate:.1f} "
+            f"| {cell(t.person_consistency)} | {cell(t.label_accuracy)} "
+            f"| {cell(t.id_switches_per_min, 1)} | {rate:.1f} "
             f"| {stages.get('carry', 0):.1f} |"
         )
         for a in e.activities:
@@ -249,10 +250,10 @@ def main(argv: list[str] | None = None) -> int:
         print(track_rows[-1], file=sys.stderr, flush=True)
     print(
         "| scenario | recall | head mm mean / median | hand mm mean / median | false / frame "
-        "| limb type acc | left/right acc | person consistency | ID switches / min | sets/s "
-        "| carry ms |"
+        "| limb type acc | left/right acc | person consistency | label acc | ID switches / min "
+        "| sets/s | carry ms |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     print("\n".join(track_rows))
     print()
     print(
