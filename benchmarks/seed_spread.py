@@ -15,8 +15,9 @@ per seed for the eight scenes on one core) and prints:
 - per scenario and activity: recognised and false summed over the seeds, out of
   true x seeds;
 - per scenario, the tracking figures of issue 4 averaged over the seeds (recall, mean hand
-  error, false targets per frame, left/right accuracy, identity switches per minute): one
-  seed's switches move by a whole switch (4 per minute in a 15 s scene) on a coin flip.
+  error, false targets per frame, left/right accuracy, label accuracy, identity switches per
+  minute): one seed's switches move by a whole switch (4 per minute in a 15 s scene) on a
+  coin flip.
 """
 
 from __future__ import annotations
@@ -60,6 +61,7 @@ def main(argv: list[str] | None = None) -> int:
                         t.hand_error_mm_mean,
                         t.false_targets_per_frame,
                         t.left_right_accuracy,
+                        t.label_accuracy,
                         t.id_switches_per_min,
                     )
                 )
@@ -113,12 +115,12 @@ def main(argv: list[str] | None = None) -> int:
     print()
     print(
         "| scenario, mean over seeds | recall | hand mm | false / frame | left/right "
-        "| ID switches / min |"
+        "| label acc | ID switches / min |"
     )
-    print("|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|")
     for name, rows in tracking.items():
-        r, hand, false, lr, sw = np.nanmean(np.array(rows, dtype=float), axis=0)
-        print(f"| {name} | {r:.3f} | {hand:.0f} | {false:.2f} | {lr:.3f} | {sw:.1f} |")
+        r, hand, false, lr, la, sw = np.nanmean(np.array(rows, dtype=float), axis=0)
+        print(f"| {name} | {r:.3f} | {hand:.0f} | {false:.2f} | {lr:.3f} | {la:.3f} | {sw:.1f} |")
     return 0
 
 
