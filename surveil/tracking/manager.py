@@ -1566,9 +1566,25 @@ class MultiTargetTracker:
             ok &= ~(np.array([self._hand_like(tr) for tr in rows_tr])[:, None] & crown[None])
         if lc.reacquire_own_body:
             ok &= ~self._claimed_by_others(rows_tr, sp)
+        if lc.reacquire_above_head_m > 0:
+            ok &= ~(
+                np.array([self._hand_like(tr) for tr in rows_tr])[:, None]
+                & self._on_a_head(sp, lc.reacquire_above_head_m)[None]
+            )
         cost = np.where(ok, d, 1e6)
         rows, cols = linear_sum_assignment(cost)
         return {rows_tr[r].id: int(c) for r, c in zip(rows, cols, strict=True) if cost[r, c] < 1e6}
+
+    def _on_a_head(self, points_m: np.ndarray, radius_m: float) -> np.ndarray:
+        """(S,) bool: each point is within ``radius_m`` of an active head tracker's estimate
+        and higher than it (``reacquire_above_head_m``)."""
+        act = [tr for tr in self._tracks.values() if tr.phase in ACTIVE]
+        h = np.array([tr.mean_m for tr in act if tr.is_hand is False]).reshape(-1, 3)
+        if not len(h):
+            return np.zeros(len(points_m), bool)
+        near = np.linalg.norm(points_m[:, None] - h[None], axis=2) <= radius_m
+        above = points_m[:, None, 2] > h[None, :, 2]
+        return (near & above).any(axis=1)
 
     def _restart_unsupported(
         self, reacquired: dict[int, int], seeds: list[_Pending]

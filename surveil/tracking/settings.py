@@ -347,6 +347,15 @@ class LifecycleConfig:
         "hand's own head): a hand hidden while two people's hands met must not come back on "
         "the other person's hand",
     )
+    reacquire_above_head_m: float = setting(
+        0.3,
+        "a lost hand is not re-acquired by a candidate this close to a tracked head's "
+        "estimate and above it: a head can show two candidates (face and crown) and the one "
+        "just beyond explained_radius_m is a seed, which a hand lost for a while, its gate "
+        "grown, would take (held-out pick_place take 102 at 12.2 s: the hand then stayed "
+        "combined with its head, and its own tracker unlabelled, to the end); 0 = off, m",
+        min=0.0,
+    )
     merge_lost_s: float = setting(
         0.6,
         "a hand of a person lost at most this long is re-acquired onto another person's hand "

@@ -2181,3 +2181,43 @@ def test_a_hand_lost_beside_another_keeps_its_candidate_from_the_neighbour(rig, 
         assert owners == ("p1/right_hand", "p2/right_hand")
     else:
         assert owners == ("p2/right_hand", "p1/right_hand")
+
+
+@pytest.mark.parametrize("radius_m", [0.3, 0.0])
+def test_a_lost_hand_is_not_reacquired_on_its_heads_crown(rig, rng, radius_m):
+    """A raised right hand goes unseen for a second while the head shows a second
+    candidate 17 cm above its first (a crown; just beyond explained_radius_m, so a seed).
+    The lost hand's gate has grown to reacquire_max_m, which reaches the crown (held-out
+    pick_place take 102 at 12.2 s: the hand then stayed combined with its head to the end).
+    It must wait for its own candidate and come back on it with its label; with the test off
+    (``reacquire_above_head_m`` 0) it is re-acquired on the crown."""
+    p = body((2.5, 2.0), 90.0)
+    raised = p["right_hand"] + 0.3 * p["fwd"] + [0.0, 0.0, 0.4]
+    crown = p["head"] + [0.0, 0.0, 0.17]
+    frames = [[p["head"], p["left_hand"], p["right_hand"]] for _ in range(35)]
+    frames += [
+        [p["head"], p["left_hand"], p["right_hand"] + u * (raised - p["right_hand"])]
+        for u in np.linspace(0, 1, 6)[1:]
+    ]
+    frames += [[p["head"], p["left_hand"], raised] for _ in range(10)]
+    n_hidden = len(frames)
+    frames += [[p["head"], p["left_hand"]] + ([crown] if k >= 2 else []) for k in range(16)]
+    frames += [[p["head"], p["left_hand"], raised, crown] for _ in range(10)]
+    cfg = TrackingConfig(lifecycle=LifecycleConfig(reacquire_above_head_m=radius_m))
+    out = run(MultiTargetTracker(cfg, rig, seed=5), frames, rng)
+    hand_id = {s.label: s.target_id for s in out[n_hidden - 1].targets}["p1/right_hand"]
+    on_crown = [
+        f
+        for f in out[n_hidden:]
+        for s in f.targets
+        if s.target_id == hand_id
+        and s.phase is not Phase.LOST
+        and np.linalg.norm(s.mean_m - crown) < 0.08
+    ]
+    if radius_m == 0:
+        assert on_crown
+        return
+    assert not on_crown
+    final = {s.label: s for s in out[-1].targets}
+    assert final["p1/right_hand"].target_id == hand_id
+    assert np.linalg.norm(final["p1/right_hand"].mean_m - raised) < 0.05
