@@ -61,6 +61,11 @@ UNEXPLAINED_LOG_S = 10.0
 # the hand's own seed, seen twice), m
 SEEN_ONCE_PENALTY_M = 0.1
 
+# a lost hand moving towards a seed on a head at least this fast when it was lost (a hand
+# raised to the face: 0.56 m/s on the held-out negative takes) may still be re-acquired on it
+# (``reacquire_above_head_m``), m/s
+TOWARDS_HEAD_MPS = 0.2
+
 
 # per-frame decay of the facing evidence of the last few frames (about 5), against which
 # the accumulated evidence (``facing_decay``, about 30 frames) is checked: after a person
@@ -1567,9 +1572,15 @@ class MultiTargetTracker:
         if lc.reacquire_own_body:
             ok &= ~self._claimed_by_others(rows_tr, sp)
         if lc.reacquire_above_head_m > 0:
+            hand = np.array([self._hand_like(tr) for tr in rows_tr])
+            to_seed = sp[None] - last[:, None]
+            vel = np.array([tr.vel_mps for tr in rows_tr])
+            towards = np.einsum("rsk,rk->rs", to_seed, vel) / np.maximum(d, 1e-9)
             ok &= ~(
-                np.array([self._hand_like(tr) for tr in rows_tr])[:, None]
+                hand[:, None]
                 & self._on_a_head(sp, lc.reacquire_above_head_m)[None]
+                & (d > lc.reacquire_gate_m)  # lost elsewhere, not at the face ...
+                & (towards < TOWARDS_HEAD_MPS)  # ... and not on its way to it
             )
         cost = np.where(ok, d, 1e6)
         rows, cols = linear_sum_assignment(cost)

@@ -350,10 +350,12 @@ class LifecycleConfig:
     reacquire_above_head_m: float = setting(
         0.3,
         "a lost hand is not re-acquired by a candidate this close to a tracked head's "
-        "estimate and above it: a head can show two candidates (face and crown) and the one "
-        "just beyond explained_radius_m is a seed, which a hand lost for a while, its gate "
-        "grown, would take (held-out pick_place take 102 at 12.2 s: the hand then stayed "
-        "combined with its head, and its own tracker unlabelled, to the end); 0 = off, m",
+        "estimate and above it, unless it was lost within reacquire_gate_m of it or moving "
+        "towards it (a hand at or rising to the face): a head can show two candidates (face "
+        "and crown) and the one just beyond explained_radius_m is a seed, which a hand lost "
+        "for a while, its gate grown, would take (held-out pick_place take 102 at 12.2 s: the "
+        "hand then stayed combined with its head, and its own tracker unlabelled, to the "
+        "end); 0 = off, m",
         min=0.0,
     )
     merge_lost_s: float = setting(

@@ -2221,3 +2221,25 @@ def test_a_lost_hand_is_not_reacquired_on_its_heads_crown(rig, rng, radius_m):
     final = {s.label: s for s in out[-1].targets}
     assert final["p1/right_hand"].target_id == hand_id
     assert np.linalg.norm(final["p1/right_hand"].mean_m - raised) < 0.05
+
+
+def test_a_lost_hand_rising_to_the_face_is_reacquired_there(rig, rng):
+    """A right hand rises to the face at 0.6 m/s and is lost 35 cm below it (its blob
+    merges with the face's); its candidate shows again at the face, 13 cm above the head's
+    estimate. It was moving towards that point when lost (held-out negative takes 101 and
+    103, touch_face at 8.1-8.8 s), so it is re-acquired there, keeping its tracker; no new
+    tracker starts on it."""
+    p = body((2.5, 2.0), 90.0)
+    face = p["head"] + 0.12 * p["fwd"] + [0.0, 0.0, 0.13]
+    frames = [[p["head"], p["left_hand"], p["right_hand"]] for _ in range(35)]
+    path = [p["right_hand"] + u * (face - p["right_hand"]) for u in np.linspace(0, 1, 18)[1:]]
+    frames += [[p["head"], p["left_hand"], q] for q in path[:11]]
+    n_lost = len(frames)
+    frames += [[p["head"], p["left_hand"]] for _ in range(6)]
+    frames += [[p["head"], p["left_hand"], face] for _ in range(10)]
+    out = run(MultiTargetTracker(TrackingConfig(), rig, seed=5), frames, rng)
+    hand_id = {s.label: s.target_id for s in out[n_lost - 1].targets}["p1/right_hand"]
+    starts = [t for f in out[n_lost:] for t in f.transitions if t.old is Phase.UNINITIALISED]
+    assert not [t for t in starts if np.linalg.norm(t.position_m - face) < 0.1]
+    near = [s for s in out[-1].targets if np.linalg.norm(s.mean_m - face) < 0.08]
+    assert hand_id in {s.target_id for s in near}
