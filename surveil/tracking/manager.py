@@ -1123,12 +1123,12 @@ class MultiTargetTracker:
             c
             for c in self._tracks.values()
             if c.phase is Phase.UNLABELLED
-            and np.linalg.norm(self._pts - c.mean_m, axis=1).min() <= lc.explained_radius_m
             and c.person == 0
             and c.is_hand is not False
             and not c.demoted
             and c.born_ns > pair.joined_ns
             and np.linalg.norm(c.mean_m - pair.mean_m) >= lc.separate_distance_m
+            and np.linalg.norm(self._pts - c.mean_m, axis=1).min() <= lc.explained_radius_m
             and not self._there_as_pair_joined(pair, c.mean_m, c.born_ns)
         ]
 
