@@ -122,6 +122,7 @@ class _StillEpisode:
     before: CarryEstimate | None
     apart_ns: int | None = None
     resting_ns: int = 0  # the last time the hand was within coincidence_m of the point
+    hidden_ns: int = 0  # the last time its tracker was lost (wait_for_lost_hand)
     # (t_ns, height m) of the hand while it rests there: the contact is where it is lowest
     rest_heights: list[tuple[int, float]] = field(default_factory=list)
 
@@ -838,7 +839,18 @@ class ActivityEngine:
             # the carry state "after" exists only once the hand has left: while it rests at
             # the point (a careful place, demo seed 1: about 2.1 s) the timeout waits, up to
             # max_coincidence_s from the stop
-            timed_out = t - st.resting_ns >= _ns(th.separation_timeout_s) or (
+            # a hand hidden at its still point (the box it took hides it, pick_place@102)
+            # may come back with the object: the evidence from before it was lost cannot say,
+            # so the timeout counts from its return. One lost after it left is not waited for
+            # (negative@101: back at the face, its circle read the face's rim as an object).
+            if (
+                th.wait_for_lost_hand
+                and st.apart_ns is None
+                and snap is not None
+                and snap.phase is Phase.LOST
+            ):
+                st.hidden_ns = t
+            timed_out = t - max(st.resting_ns, st.hidden_ns) >= _ns(th.separation_timeout_s) or (
                 t - st.detected_ns >= _ns(th.max_coincidence_s)
             )
             if ready or timed_out:

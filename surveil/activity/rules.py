@@ -102,6 +102,13 @@ class Thresholds:
         min=0.1,
         max=600.0,
     )
+    wait_for_lost_hand: bool = setting(
+        True,
+        "pick/place: a hand whose tracker is lost at its still point (before it left) is "
+        "waited for: the timeout counts from the last moment it was lost there (up to "
+        "max_coincidence_s from the stop); its return, not the evidence from before it was "
+        "hidden, says what it holds after",
+    )
     max_approach_s: float = setting(
         2.0,
         "look back at most this far before the climax for the approach start, s",

@@ -619,6 +619,7 @@ class CarryAnalyser:
         self._cams = rig.as_mapping()
         self._window_ns = int(round(cfg.window_s * 1e9))
         self._hands: dict[int, _HandState] = {}
+        self._prev_t_ns: int | None = None  # the previous step's time
         # person -> (dress hue distribution (B,) summing to 1, time of its last update, ns)
         self._dress: dict[int, tuple[np.ndarray, int]] = {}
 
@@ -626,6 +627,7 @@ class CarryAnalyser:
         """Forget every hand and every person's dress."""
         self._hands.clear()
         self._dress.clear()
+        self._prev_t_ns = None
 
     def dress(self, person: int) -> np.ndarray | None:
         """(B,) hue distribution of the person's dress (sums to 1), or None if not seen."""
@@ -673,10 +675,15 @@ class CarryAnalyser:
         cfg = self.cfg
         hands = [t for t in targets if is_analysed_hand(t, cfg)]
         ids = [t.target_id for t in hands]
-        # a lost hand keeps its window and last estimate (not analysed meanwhile): re-acquired,
-        # it still holds what it held; only targets that are gone (retired) are forgotten
+        # a lost hand keeps its window and last estimate (not analysed meanwhile; with
+        # pause_hidden its samples do not age): re-acquired, it still holds what it held; only
+        # targets that are gone (retired) are forgotten
         for gone in set(self._hands) - {t.target_id for t in targets}:
             del self._hands[gone]
+        if cfg.pause_hidden and self._prev_t_ns is not None:
+            for hidden in set(self._hands) - set(ids):
+                self._hands[hidden].window.pause(t_ns - self._prev_t_ns)
+        self._prev_t_ns = t_ns
         for tid in ids:
             if tid not in self._hands:
                 self._hands[tid] = _HandState(HueWindow(cfg.max_window_samples, cfg.hue_bins))

@@ -120,6 +120,9 @@ def decide_carrying(
 class HueWindow:
     """Ring buffer of one hand's recent (time, reliability, distribution) samples.
 
+    Each sample has two times: when it was taken (:meth:`oldest_ns`) and its age on the
+    window's clock, which :meth:`pause` holds still (a hidden hand's evidence does not age).
+
     Parameters
     ----------
     capacity : int
@@ -131,7 +134,8 @@ class HueWindow:
     def __init__(self, capacity: int, n_bins: int) -> None:
         if capacity < 1:
             raise ValueError(f"capacity must be >= 1, got {capacity}")
-        self._t_ns = np.zeros(capacity, np.int64)
+        self._t_ns = np.zeros(capacity, np.int64)  # on the window's clock
+        self._taken_ns = np.zeros(capacity, np.int64)
         self._rho = np.zeros(capacity)
         self._pdfs = np.zeros((capacity, n_bins))
         self._n = 0
@@ -149,10 +153,17 @@ class HueWindow:
         """Add one sample, overwriting the oldest when full."""
         cap = len(self._rho)
         self._t_ns[self._head] = t_ns
+        self._taken_ns[self._head] = t_ns
         self._rho[self._head] = rho
         self._pdfs[self._head] = pdf
         self._head = (self._head + 1) % cap
         self._n = min(self._n + 1, cap)
+
+    def pause(self, duration_ns: int) -> None:
+        """Let ``duration_ns`` pass without ageing the samples: they count in :meth:`fused`
+        for that much longer (the window holds the last ``window_ns`` of time in which the
+        hand was looked at, not of the clock)."""
+        self._t_ns[: self._n] += duration_ns
 
     def fused(self, t_ns: int, window_ns: int) -> tuple[np.ndarray, float]:
         """Eq. 29 over the samples with ``t_ns - window_ns < t <= t_ns``.
@@ -168,9 +179,9 @@ class HueWindow:
         return fuse_distributions(self._pdfs[sel], rho), float(rho.sum())
 
     def oldest_ns(self, t_ns: int, window_ns: int) -> int | None:
-        """Time of the oldest sample :meth:`fused` would use at ``t_ns`` (None: none)."""
+        """When the oldest sample :meth:`fused` would use at ``t_ns`` was taken (None: none)."""
         sel = self._in_window(t_ns, window_ns)
-        return int(self._t_ns[sel].min()) if sel.any() else None
+        return int(self._taken_ns[sel].min()) if sel.any() else None
 
     def _in_window(self, t_ns: int, window_ns: int) -> np.ndarray:
         """(capacity,) bool: the slots holding samples with ``t_ns - window_ns < t <= t_ns``."""

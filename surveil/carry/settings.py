@@ -75,6 +75,12 @@ class CarryConfig:
     max_window_samples: int = setting(
         128, "ring-buffer capacity per hand (camera-frame samples in the window)", min=1
     )
+    pause_hidden: bool = setting(
+        True,
+        "a lost hand's window does not age while it is lost: re-acquired, it still holds what "
+        "it held before, however long it was hidden (off: the window is the last window_s of "
+        "the clock, so a hand hidden longer comes back with none)",
+    )
     overlap_distance_m: float = setting(
         0.25, "two hands closer than this (3D) overlap: their windows freeze, m", min=0.0
     )

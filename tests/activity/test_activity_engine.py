@@ -3,6 +3,7 @@ negative cases, a user rule, timeouts, determinism, frame-rate independence, bou
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from pathlib import Path
 
@@ -403,6 +404,55 @@ def test_a_hand_resting_at_its_still_point_for_good_is_decided_by_max_coincidenc
     ev = only(run(rules, script.stream()), "pick")
     assert ev.confidence == pytest.approx(0.45)  # a timeout
     assert 11.3 * S <= ev.end_ns <= 11.6 * S
+
+
+def hidden(stream, tid, from_s, to_s):
+    """``stream`` with tracker ``tid`` lost from ``from_s`` to ``to_s``: its estimate frozen
+    where it was lost, and no carry estimate (the carry stage does not analyse lost hands)."""
+    out, frozen = [], None
+    for frame, carry in stream:
+        if from_s * S <= frame.t_ns < to_s * S:
+            snap = next(t for t in frame.targets if t.target_id == tid)
+            if frozen is None:
+                frozen = dataclasses.replace(snap, phase=Phase.LOST)
+            targets = tuple(frozen if t.target_id == tid else t for t in frame.targets)
+            frame = dataclasses.replace(frame, targets=targets)
+            carry = {k: v for k, v in carry.items() if k != tid}
+        out.append((frame, carry))
+    return out
+
+
+@pytest.mark.parametrize("wait", [True, False])
+def test_a_hand_lost_after_its_pick_is_waited_for(tmp_path, rules, wait):
+    """pick_place@102: the box the hand took hid it (one camera saw it) from just after its
+    stop until 2.4 s later, past separation_timeout_s. Its return, holding the box, decides
+    the pick; without wait_for_lost_hand the timeout decided on the empty hand seen before
+    it was lost."""
+    path = keyframes(
+        (0.5, P1_RIGHT_REST),
+        (1.1, (0.6, -0.2, 0.95)),
+        (1.6, (0.6, -0.2, 0.95)),
+        (2.2, (0.25, -0.15, 1.0)),
+    )
+    script = move_right_hand(path, switch(4.2, empty(), holding(BLUE)))
+    script.duration_s = 7.0
+    stream = hidden(script.stream(), 3, 1.7, 4.2)
+    if not wait:
+        f = tmp_path / "r.toml"
+        f.write_text(
+            default_rules_path()
+            .read_text()
+            .replace("\n[defaults]\n", "\n[defaults]\nwait_for_lost_hand = false\n", 1)
+        )
+        rules = load_rules([f])
+    events = run(rules, stream)
+    if wait:
+        ev = only(events, "pick")
+        assert abs(ev.climax_ns - 1.1 * S) <= 0.1 * S
+        assert ev.confidence == pytest.approx(0.9)  # decided on its return, not timed out
+        assert 4.2 * S <= ev.end_ns <= 4.7 * S
+    else:
+        assert [e.activity for e in events] == []
 
 
 def test_a_hand_leaving_its_still_point_is_released_once(rules):

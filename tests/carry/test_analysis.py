@@ -294,6 +294,24 @@ def test_restart_drops_what_the_window_held(camera):
     assert not fresh.carrying and fresh.since_ns == 7 * NS
 
 
+@pytest.mark.parametrize("pause", [True, False])
+def test_a_hand_lost_longer_than_the_window_comes_back_with_what_it_held(camera, pause):
+    """pick_place@102: the hand carrying the box was lost for 1.6 s; re-acquired, its window
+    had aged empty and the first frames there (the box out of its circle) read it as empty,
+    so the place that followed had no object before it."""
+    cfg = dataclasses.replace(CarryConfig(), pause_hidden=pause)
+    analyser = CarryAnalyser(cfg, Rig((camera,)))
+    a = hand_target()
+    assert run(analyser, [make_frame(camera)] * 5, [a])[1].carrying
+    lost = dataclasses.replace(a, phase=Phase.LOST)
+    assert run(analyser, [make_frame(camera)] * 30, [lost], t0=5 * NS) == {}  # 2 s hidden
+    back = run(analyser, [make_frame(camera, box=False)] * 2, [a], t0=35 * NS)[1]
+    if pause:
+        assert back.carrying and back.since_ns == 0  # the five frames before it was lost
+    else:
+        assert not back.carrying and back.since_ns == 35 * NS
+
+
 def make_two_hands(camera, left_m, right_m):
     """One person, both hands stretched out and each next to a green patch (a green dress
     seen around both hands)."""

@@ -50,6 +50,21 @@ def test_window_keeps_only_recent_samples_and_bounded_memory():
     assert len(win) == 0 and win.fused(900, 10**9)[1] == 0.0
 
 
+def test_a_paused_window_keeps_its_samples_for_the_pause_and_their_capture_times():
+    win = HueWindow(capacity=8, n_bins=3)
+    win.push(100, 1.0, np.eye(3)[0])
+    win.push(200, 1.0, np.eye(3)[1])
+    assert win.fused(1150, window_ns=1000)[1] == 1.0  # 100 has aged out, 200 not yet
+    win.pause(900)  # 900 ns in which the hand was not looked at
+    pdf, total = win.fused(1150, window_ns=1000)
+    assert total == 2.0
+    np.testing.assert_allclose(pdf, [0.5, 0.5, 0.0])
+    assert win.oldest_ns(1150, window_ns=1000) == 100  # when it was taken, not its age
+    win.push(1300, 1.0, np.eye(3)[2])  # the clock resumes: 100 (now at 1000) ages out
+    assert win.fused(2001, window_ns=1000)[1] == 2.0
+    assert win.oldest_ns(2001, window_ns=1000) == 200
+
+
 def test_decision_threshold_hue_and_wrap():
     pdf = np.zeros(180)
     pdf[[179, 0, 1]] = 0.03  # a red object on both sides of 0
