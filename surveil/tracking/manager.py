@@ -1492,7 +1492,7 @@ class MultiTargetTracker:
         estimate is out of the seed's owner's reach (``arm_reach_m``; the pair followed the
         other hand home), 1 otherwise."""
         if heads is None:
-            return 1
+            return 0 if self._beyond_every_reach(pair_m, seed_m) else 1
         modes = np.array([pair_m, seed_m])
         decided = lab.owner_rule(modes, heads, 0.0)
         assert decided is not None  # a zero margin always decides
@@ -1503,6 +1503,24 @@ class MultiTargetTracker:
             return 0
         seed_owner = owners_modes.index(1)
         return 2 if np.linalg.norm(pair_m - heads[seed_owner]) > lcfg.arm_reach_m else 1
+
+    def _beyond_every_reach(self, pair_m: np.ndarray, seed_m: np.ndarray) -> bool:
+        """Whether a seed cannot be a hand leaving a pair at ``pair_m`` whose people are not
+        told apart (``seed_within_reach``): the pair is within ``arm_reach_m`` of a tracked
+        head, so its hands are a tracked person's, and the seed is farther than any hand
+        reaches from every tracked head. A pair far from every head may be the hands of
+        someone whose head is not tracked, and parts as before."""
+        if not self.cfg.lifecycle.seed_within_reach:
+            return False
+        _, heads = self._live_heads()
+        if not len(heads):
+            return False
+        lcfg = self.cfg.labelling
+        if np.linalg.norm(heads - pair_m, axis=1).min() > lcfg.arm_reach_m:
+            return False
+        return bool(
+            np.linalg.norm(heads - seed_m, axis=1).min() > lcfg.arm_reach_m + lcfg.person_margin_m
+        )
 
     def _reacquire(self, seeds: list[_Pending], t_ns: int) -> dict[int, int]:
         """Lost tracker id -> index of the seed that re-acquires it.

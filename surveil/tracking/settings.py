@@ -180,6 +180,13 @@ class LifecycleConfig:
         "it instead of a new tracker starting there, m",
         min=0.0,
     )
+    seed_within_reach: bool = setting(
+        True,
+        "a pair of unattached hands, or of one person's, within arm_reach_m of a tracked head "
+        "does not part on a seed beyond every tracked head's reach (arm_reach_m + "
+        "person_margin_m): no hand of a tracked person is there (handshake take 102, seed 1: "
+        "a ghost 15 cm above the floor, 1.3 m from the head)",
+    )
     held_views: int = setting(
         3,
         "a combined pair with a candidate within explained_radius_m of its estimate that "

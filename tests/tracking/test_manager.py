@@ -817,6 +817,29 @@ def test_a_hand_that_leaves_a_pair_unseen_parts_it_instead_of_starting_a_tracker
     assert np.linalg.norm(final["p1/right_hand"] - right) < 0.05
 
 
+@pytest.mark.parametrize("within_reach", [True, False])
+def test_joined_hands_do_not_part_on_a_ghost_out_of_every_heads_reach(rig, rng, within_reach):
+    """handshake take 102, seed 1: a pair of one person's hands parted on a ghost 15 cm
+    above the floor, 1.3 m from the head, and one hand's label went there. Here the hands
+    stay clasped in front of the chest while a ghost shows 0.56 m below them, 1.14 m from
+    the head: beyond any hand's reach, so the pair does not part on it."""
+    frames, _, p = clap_frames(cross=False)
+    rest = 35 + 8  # the hands have met
+    meet = frames[rest][1]
+    ghost = p["head"] + 0.45 * p["fwd"] - [0, 0, 1.05]
+    assert np.linalg.norm(ghost - p["head"]) > 1.1 and np.linalg.norm(ghost - meet) < 0.6
+    frames = frames[: rest + 3] + [[p["head"], meet, ghost]] * 12
+    lc = dataclasses.replace(LONE.lifecycle, seed_within_reach=within_reach)
+    cfg = dataclasses.replace(LONE, lifecycle=lc)
+    out = run(MultiTargetTracker(cfg, rig, seed=8), frames, rng)
+    splits = [t for f in out for t in f.transitions if t.old is Phase.COMBINED]
+    if within_reach:
+        assert not splits
+        assert all(s.phase is Phase.COMBINED for s in out[-1].targets if s.limb.is_hand)
+    else:
+        assert splits  # the old behaviour: the ghost took a hand
+
+
 def test_a_new_tracker_that_meets_a_persons_hand_is_lost_not_combined(rig, rng):
     """A ghost candidate (here 40 cm in front of a labelled hand) starts a tracker that never
     joins a person; when it slides onto the hand it is a duplicate: it goes lost and the hand
