@@ -122,7 +122,7 @@ class _StillEpisode:
     before: CarryEstimate | None
     apart_ns: int | None = None
     resting_ns: int = 0  # the last time the hand was within coincidence_m of the point
-    hidden_ns: int = 0  # the last time its tracker was lost (wait_for_lost_hand)
+    hidden_ns: int = 0  # the last time its tracker was lost before it left (wait_for_lost_hand)
     # (t_ns, height m) of the hand while it rests there: the contact is where it is lowest
     rest_heights: list[tuple[int, float]] = field(default_factory=list)
 
