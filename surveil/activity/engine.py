@@ -258,6 +258,15 @@ class ActivityEngine:
         what they hold from now on is "after"; their carry windows should restart."""
         return tuple(self._released)
 
+    @property
+    def open_stills(self) -> tuple[tuple[str, int, int, int | None], ...]:
+        """The pick/place episodes not yet decided, for diagnostics: (rule id, hand tracker
+        id, the last time the hand rested at its point, the time it left it or None), ns."""
+        return tuple(
+            (st.rule.rule_id, st.hand_id, st.resting_ns, st.apart_ns)
+            for st in self._stills.values()
+        )
+
     # -----------------------------------------------------------------------------------------
     # public API
 

@@ -455,6 +455,21 @@ def test_a_hand_lost_after_its_pick_is_waited_for(tmp_path, rules, wait):
         assert [e.activity for e in events] == []
 
 
+def test_open_stills_lists_a_pick_until_it_is_decided(rules):
+    engine = ActivityEngine(rules)
+    seen, events = [], []
+    for frame, carry in reach(switch(1.35, empty(), holding(BLUE))).stream():
+        events += engine.step(frame, carry)
+        seen.append((frame.t_ns, engine.open_stills))
+    during = dict(seen)[min(t for t, _ in seen if t >= 1.5 * S)]
+    assert {(rule, hand) for rule, hand, _, _ in during} == {
+        ("default.toml:pick", 3),
+        ("default.toml:place", 3),
+    }
+    assert all(rest >= 1.1 * S and apart is None for _, _, rest, apart in during)
+    assert only(events, "pick") and seen[-1][1] == ()
+
+
 def test_a_hand_leaving_its_still_point_is_released_once(rules):
     """The pipeline restarts the carry window of a hand that leaves its still point (the
     reach in ``reach`` stops at 1.1-1.6 s, then returns): the engine names it once, at the
