@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from surveil.activity import load_rules
+from surveil.eval.score import align_frames
 from surveil.io.ground_truth import load_ground_truth
 from surveil.io.recording import open_recording
 from surveil.pipeline import Pipeline, load_pipeline_config, use_one_opencv_thread
@@ -67,7 +68,9 @@ def timeline(
             return
         if t_s < from_s or k % every:
             continue
-        g = int(np.argmin(np.abs(gt.t_ns - fs.t_ns)))
+        g = int(align_frames(gt.t_ns, np.array([fs.t_ns]), gt.fps)[0])
+        if g < 0:
+            continue  # no true frame within half a period
         x = gt.positions_m[g, j]
         if not np.isfinite(x).all():
             yield f"{t_s:6.2f} | not in the room"
@@ -95,10 +98,9 @@ def timeline(
             f"{rule.rsplit(':', 1)[-1]}:t{hand} rest {_s(rest, t0_ns)} apart {_s(apart, t0_ns)}"
             for rule, hand, rest, apart in pipeline.activity.open_stills
         )
-        n_views = int(gt.visible[g, j].sum())
         yield (
-            f"{t_s:6.2f} | {n_views} views | holds {','.join(held) or '-'} | {who} | {carry}"
-            f" | {stills or '-'}"
+            f"{t_s:6.2f} | {gt.n_views[g, j]} views | holds {','.join(held) or '-'} | {who}"
+            f" | {carry} | {stills or '-'}"
         )
 
 
