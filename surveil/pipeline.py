@@ -48,6 +48,7 @@ from surveil.recon.candidates import make_candidates
 from surveil.recon.crowns import people_from_crowns, silhouette_crowns
 from surveil.recon.settings import CandidateConfig
 from surveil.tracking import MultiTargetTracker, TrackingConfig
+from surveil.tracking.blob_pull import pull_hands_onto_blobs
 
 log = logging.getLogger(__name__)
 
@@ -366,11 +367,25 @@ class Pipeline:
             )
         t1 = time.perf_counter()
         track = self.tracker.step(fs.t_ns, candidates, observations)
-        t2 = time.perf_counter()
         self._n_heads = sum(
             1 for t in track.targets if t.limb is Limb.HEAD and t.phase is not Phase.LOST
         )
+        # the filter's own estimates: what the front end is fed back stays the tracker's
         self._people_m = self._protected_people(fs.t_ns, track.targets)
+        tcfg = self.cfg.tracking
+        if tcfg.blob_pull_sigma_px > 0:
+            track = dataclasses.replace(
+                track,
+                targets=pull_hands_onto_blobs(
+                    track.targets,
+                    observations,
+                    self.rig,
+                    tcfg.blob_pull_sigma_px,
+                    tcfg.blob_pull_gate_px,
+                    tcfg.blob_pull_floor_m,
+                ),
+            )
+        t2 = time.perf_counter()
         carry = {}
         if self.cfg.carry_enabled and not learning:
             carry = self.carry.step(fs.t_ns, fs.images, observations, track.targets)

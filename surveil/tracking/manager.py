@@ -1557,6 +1557,7 @@ class MultiTargetTracker:
                     and tr.labelled
                     and tr.limb.is_hand
                     and tr.since_miss < lc.drift_window_frames
+                    and (lc.reacquire_supported or tr.misses > 0)
                 ):
                     continue
                 head = self._active_head(tr.person)

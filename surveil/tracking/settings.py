@@ -340,6 +340,13 @@ class LifecycleConfig:
         "tracker is not, and before it is lost a new tracker would start on it (an identity "
         "switch) or a lost tracker take it",
     )
+    reacquire_supported: bool = setting(
+        True,
+        "reacquire_unsupported also restarts a tracker that is supported again in this frame "
+        "set (slid onto something beside the hand); false: only one that no candidate "
+        "supports now (a hand swung up past the face drew its tracker onto a ghost 0.4 m "
+        "away while its tracker followed it 20 cm behind)",
+    )
     reacquire_with_body: bool = setting(
         True,
         "a lost hand of a person whose head is tracked is re-acquired around its last position "
@@ -652,6 +659,24 @@ class TrackingConfig:
     )
     labelling: LabellingConfig = setting(
         default_factory=LabellingConfig, doc="head / hand, person, left / right labels"
+    )
+    blob_pull_sigma_px: float = setting(
+        8.0,
+        "a labelled hand's reported point is pulled onto the blobs at its projection, each a "
+        "line of sight with this error in pixels (0 = off: the filter's estimate; chosen at "
+        "640x480); docs/tracking.md, 'Hands pulled onto their blobs', px",
+        min=0.0,
+    )
+    blob_pull_gate_px: float = setting(
+        25.0,
+        "a blob pulls a hand when its centroid lies this close to the hand's projection, px",
+        min=0.0,
+    )
+    blob_pull_floor_m: float = setting(
+        0.05,
+        "added to the spread of the filter's particles (a standard deviation) in the prior of "
+        "the pull, m",
+        min=0.001,
     )
     head_centre_rise_m: float = setting(
         0.04,

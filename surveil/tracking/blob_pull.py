@@ -1,0 +1,114 @@
+"""A hand's reported point pulled onto the blobs that show it (not in the paper).
+
+The particle filter's estimate of a hand lags a moving hand (the motion model smooths) and
+coasts where fewer than two cameras see it, because the filter only weighs 3-D candidates,
+and a candidate needs two views. Every view in which a blob lies at the hand's projection
+still says where the hand is, up to its depth along that view's line of sight. This module
+combines the two: the tracker's estimate as a Gaussian prior (its particles' covariance,
+floored), and each such blob as a Gaussian in the distance of the point from the blob's line
+of sight (``sigma_px`` at the point's depth). Both terms are quadratic in the point, so the
+most probable point is one 3 x 3 linear solve per hand.
+
+Only the reported point changes; the filter's particles do not (measured in session 25: a
+filter weighted by one view's line of sight drifts in depth and misleads the tracker's
+decisions). Pure functions; :class:`surveil.pipeline.Pipeline` applies
+:func:`pull_hands_onto_blobs` to the tracker's output.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+
+import numpy as np
+from scipy.spatial.distance import cdist
+
+from surveil.camera import Rig
+from surveil.datatypes import CameraObservation, Phase, TargetSnapshot
+
+
+def blob_evidence(
+    points_m: np.ndarray,
+    pulled: np.ndarray,
+    observations: Mapping[str, CameraObservation],
+    rig: Rig,
+    sigma_px: float,
+    gate_px: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The lines of sight of the blobs at each pulled point's projection, as quadratic terms.
+
+    A view contributes to point i when the blob centroid nearest i's projection lies within
+    ``gate_px`` of it and i's projection is, of all ``points_m``, the nearest to that blob
+    (mutual nearest: a blob between two targets, a hand at the face, serves neither).
+
+    Parameters
+    ----------
+    points_m : (A, 3) float -- every active target's point (heads too: they claim their blobs)
+    pulled : (A,) bool -- the points to collect evidence for
+    sigma_px : the blob centroid's error in pixels; at depth z it is sigma_px * z / f metres
+
+    Returns
+    -------
+    info : (A, 3, 3) -- sum over views of (I - d d^T) / sigma^2, m^-2
+    rhs : (A, 3) -- sum over views of (I - d d^T) o / sigma^2 (o the camera centre)
+    n_views : (A,) int -- views that contributed
+    """
+    n = len(points_m)
+    info = np.zeros((n, 3, 3))
+    rhs = np.zeros((n, 3))
+    n_views = np.zeros(n, np.int64)
+    if n == 0 or not pulled.any():
+        return info, rhs, n_views
+    for cam in rig:
+        obs = observations.get(cam.name)
+        if obs is None or len(obs.blobs) == 0:
+            continue
+        px, depth = cam.project(points_m)
+        seen = cam.in_image(px, depth)
+        if not (seen & pulled).any():
+            continue
+        d = cdist(px, obs.blobs.centroids_px)
+        d[~seen] = np.inf
+        best = d.argmin(axis=1)
+        owner = d.argmin(axis=0)
+        rows = np.arange(n)
+        ok = pulled & seen & (d[rows, best] <= gate_px) & (owner[best] == rows)
+        if not ok.any():
+            continue
+        idx = np.flatnonzero(ok)
+        origin, dirs = cam.backproject(obs.blobs.centroids_px[best[idx]])
+        sigma_m = sigma_px * depth[idx] / cam.K[0, 0]
+        proj = np.eye(3)[None] - dirs[:, :, None] * dirs[:, None, :]
+        w = 1.0 / sigma_m**2
+        info[idx] += proj * w[:, None, None]
+        rhs[idx] += (proj @ origin) * w[:, None]
+        n_views[idx] += 1
+    return info, rhs, n_views
+
+
+def pull_hands_onto_blobs(
+    targets: tuple[TargetSnapshot, ...],
+    observations: Mapping[str, CameraObservation],
+    rig: Rig,
+    sigma_px: float,
+    gate_px: float,
+    prior_floor_m: float,
+) -> tuple[TargetSnapshot, ...]:
+    """``targets`` with each labelled hand in the normal phase moved to the most probable
+    point given its estimate (prior: ``cov_m2`` + ``prior_floor_m``^2 I) and the blobs at its
+    projection (:func:`blob_evidence`). Other targets, and hands no blob shows, unchanged."""
+    active = [i for i, t in enumerate(targets) if t.phase is not Phase.LOST]
+    if not active:
+        return targets
+    pts = np.array([targets[i].mean_m for i in active])
+    pulled = np.array(
+        [targets[i].limb.is_hand and targets[i].phase is Phase.NORMAL for i in active]
+    )
+    info, rhs, n_views = blob_evidence(pts, pulled, observations, rig, sigma_px, gate_px)
+    out = list(targets)
+    for k in np.flatnonzero(n_views):
+        t = targets[active[k]]
+        prec = np.linalg.inv(t.cov_m2 + prior_floor_m**2 * np.eye(3))
+        point = np.linalg.solve(prec + info[k], prec @ t.mean_m + rhs[k])
+        out[active[k]] = dataclasses.replace(t, mean_m=point)
+    return tuple(out)

@@ -1,0 +1,125 @@
+"""A hand's reported point pulled onto the blobs at its projection (surveil.tracking.blob_pull)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from surveil.datatypes import BlobSet, CameraObservation, Limb, Phase, Silhouettes, TargetSnapshot
+from surveil.tracking.blob_pull import pull_hands_onto_blobs
+
+HAND = np.array([2.4, 1.9, 1.1])
+SIGMA_PX, GATE_PX, FLOOR_M = 2.0, 25.0, 0.05
+
+
+def observe(rig, blobs_m: dict[str, list[np.ndarray]]) -> dict[str, CameraObservation]:
+    """Observations whose only blobs sit at the projections of ``blobs_m[camera]``."""
+    out = {}
+    for cam in rig.cameras:
+        h, w = cam.height, cam.width
+        pts = blobs_m.get(cam.name, [])
+        px = cam.project(np.array(pts).reshape(-1, 3))[0]
+        n = len(px)
+        blobs = BlobSet(
+            px.astype(np.float64),
+            np.full(n, 40, np.int64),
+            np.zeros((n, 4), np.int32),
+            np.ones(n, np.int32),
+            np.full(n, 0.5),
+            np.zeros((h, w), np.int32),
+        )
+        sil = Silhouettes(
+            np.zeros((h, w), np.int32),
+            np.zeros(1),
+            np.full(1, h - 1.0),
+            np.zeros((h, w), np.float32),
+        )
+        out[cam.name] = CameraObservation(cam.name, sil, np.zeros((h, w), bool), blobs)
+    return out
+
+
+def target(tid, mean_m, limb=Limb.RIGHT_HAND, phase=Phase.NORMAL, person=1) -> TargetSnapshot:
+    return TargetSnapshot(tid, person, limb, phase, np.asarray(mean_m, float), np.eye(3) * 1e-4)
+
+
+def line_distance_m(cam, point_m, through_m) -> float:
+    origin, d = cam.backproject(cam.project(through_m[None])[0])
+    v = point_m - origin
+    return float(np.linalg.norm(v - (v @ d[0]) * d[0]))
+
+
+def sideways(cam, along_m: float) -> np.ndarray:
+    """A unit world vector perpendicular to ``cam``'s line of sight to HAND."""
+    look = HAND - cam.centre_m
+    side = np.cross(look, [0.0, 0.0, 1.0])
+    return along_m * side / np.linalg.norm(side)
+
+
+def test_one_view_moves_the_point_onto_its_line_of_sight_and_keeps_its_depth(rig):
+    cam = rig.cameras[0]
+    estimate = HAND + sideways(cam, 0.08)
+    out = pull_hands_onto_blobs(
+        (target(1, estimate),), observe(rig, {cam.name: [HAND]}), rig, SIGMA_PX, GATE_PX, FLOOR_M
+    )
+    pulled = out[0].mean_m
+    depth = lambda p: float(cam.to_cam(p[None])[0, 2])  # noqa: E731
+    # the offset across the line shrinks as two Gaussians' product says: line variance
+    # over the sum of both
+    line_var = (SIGMA_PX * depth(estimate) / cam.K[0, 0]) ** 2
+    prior_var = 1e-4 + FLOOR_M**2
+    expected = 0.08 * line_var / (line_var + prior_var)
+    assert line_distance_m(cam, estimate, HAND) == pytest.approx(0.08, rel=0.02)
+    assert line_distance_m(cam, pulled, HAND) == pytest.approx(expected, rel=0.05)
+    assert depth(pulled) == pytest.approx(depth(estimate), abs=0.005)
+
+
+def test_two_views_move_the_point_onto_the_hand(rig):
+    a, b = rig.cameras[0], rig.cameras[1]
+    estimate = HAND + np.array([0.06, -0.05, 0.07])
+    seen = observe(rig, {a.name: [HAND], b.name: [HAND]})
+    sharp_px = 0.3  # blobs far surer than the estimate: the point goes to where they meet
+    out = pull_hands_onto_blobs((target(1, estimate),), seen, rig, sharp_px, GATE_PX, FLOOR_M)
+    assert np.linalg.norm(estimate - HAND) > 0.1
+    assert np.linalg.norm(out[0].mean_m - HAND) < 0.01
+
+
+def test_a_blob_nearer_another_target_pulls_nothing(rig):
+    """A hand at the face: the face's blob belongs to the head, whose projection is nearer."""
+    cam = rig.cameras[0]
+    face = HAND + sideways(cam, 0.05)
+    hand = HAND + sideways(cam, 0.09)
+    head = target(2, face, limb=Limb.HEAD)
+    out = pull_hands_onto_blobs(
+        (target(1, hand), head), observe(rig, {cam.name: [face]}), rig, SIGMA_PX, GATE_PX, FLOOR_M
+    )
+    np.testing.assert_array_equal(out[0].mean_m, hand)
+    np.testing.assert_array_equal(out[1].mean_m, face)
+
+
+@pytest.mark.parametrize(
+    "limb, phase, person",
+    [
+        (Limb.HEAD, Phase.NORMAL, 1),
+        (Limb.RIGHT_HAND, Phase.COMBINED, 1),
+        (Limb.RIGHT_HAND, Phase.LOST, 1),
+        (Limb.UNKNOWN, Phase.UNLABELLED, 0),
+    ],
+)
+def test_only_labelled_hands_in_the_normal_phase_move(rig, limb, phase, person):
+    cam = rig.cameras[0]
+    estimate = HAND + sideways(cam, 0.08)
+    one = target(1, estimate, limb=limb, phase=phase, person=person)
+    out = pull_hands_onto_blobs(
+        (one,), observe(rig, {cam.name: [HAND]}), rig, SIGMA_PX, GATE_PX, FLOOR_M
+    )
+    assert out[0] is one
+
+
+def test_a_blob_beyond_the_gate_pulls_nothing(rig):
+    cam = rig.cameras[0]
+    estimate = HAND + sideways(cam, 0.8)
+    one = target(1, estimate)
+    out = pull_hands_onto_blobs(
+        (one,), observe(rig, {cam.name: [HAND]}), rig, SIGMA_PX, GATE_PX, FLOOR_M
+    )
+    assert out[0] is one
