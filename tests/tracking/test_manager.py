@@ -2266,3 +2266,32 @@ def test_a_lost_hand_rising_to_the_face_is_reacquired_there(rig, rng):
     assert not [t for t in starts if np.linalg.norm(t.position_m - face) < 0.1]
     near = [s for s in out[-1].targets if np.linalg.norm(s.mean_m - face) < 0.08]
     assert hand_id in {s.target_id for s in near}
+
+
+@pytest.mark.parametrize("supported", [False, True])
+def test_a_hand_swung_up_past_a_ghost_keeps_the_tracker_that_follows_it(rig, rng, supported):
+    """A right hand swung up (the negative scene's wave, 5.8-6.1 s) loses its candidate for
+    two frame sets while a ghost shows 0.4 m in front of it; the hand's candidate is back
+    beside its tracker, which followed it, in the frame set the ghost's seed confirms. With
+    ``reacquire_supported`` off the tracker, supported again, stays on the hand; on (the
+    session-77 rule as it was) it is restarted on the ghost, and a new tracker takes the hand."""
+    p = body((2.0, 2.0), 0.0)
+    rise = [p["right_hand"] + [0.0, 0.0, 0.06 * k] for k in range(12)]
+    ghost = p["right_hand"] + 0.4 * p["fwd"] + [0.0, 0.0, 0.3]
+    frames = [[p["head"], p["left_hand"], p["right_hand"]] for _ in range(30)]
+    frames += [[p["head"], p["left_hand"], rise[k]] for k in range(3)]
+    frames += [[p["head"], p["left_hand"], ghost] for k in range(3, 5)]
+    frames += [[p["head"], p["left_hand"], rise[k], ghost] for k in range(5, 12)]
+    cfg = TrackingConfig(
+        lifecycle=LifecycleConfig(retire_unclaimed_s=0.0, reacquire_supported=supported)
+    )
+    out = run(MultiTargetTracker(cfg, rig, seed=3), frames, rng)
+    before = {s.label: s.target_id for s in out[29].targets}
+    assert set(before) == {"p1/head", "p1/left_hand", "p1/right_hand"}
+    on_hand = min(out[-1].targets, key=lambda s: np.linalg.norm(s.mean_m - rise[-1]))
+    assert np.linalg.norm(on_hand.mean_m - rise[-1]) < 0.1
+    if supported:
+        assert on_hand.target_id != before["p1/right_hand"]
+    else:
+        assert on_hand.target_id == before["p1/right_hand"]
+        assert on_hand.label == "p1/right_hand"
