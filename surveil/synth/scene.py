@@ -222,9 +222,13 @@ def synthesise(
     try:
         summary = _render(scenario, scenario_path, tmp, preview, preview_times_s, on_progress)
         (tmp / GT_DIR / "scenario.sha256").write_text(digest + "\n")
-        if out_dir.exists():
+        # another process may have finished the same rendering meanwhile and be reading it:
+        # keep that one (it is identical) rather than delete files under its reader
+        same = stamp.is_file() and stamp.read_text().strip() == digest
+        if out_dir.exists() and not (same and not overwrite and not preview):
             shutil.rmtree(out_dir)
-        tmp.rename(out_dir)
+        if not out_dir.exists():
+            tmp.rename(out_dir)
     finally:
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)

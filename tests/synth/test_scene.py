@@ -172,6 +172,32 @@ def test_same_seed_gives_identical_ground_truth_and_reuses_up_to_date_output(
     assert synthesise(small_scenario, out).reused
 
 
+def test_a_rendering_finished_meanwhile_by_another_process_is_kept_for_its_readers(
+    small_scenario, small_recording, tmp_path, monkeypatch
+):
+    """Two benchmark processes that render the same missing take at once: the one that
+    finishes second must not delete the files the first is already reading (session 95:
+    frames of three_people read as missing in one of two parallel seed_spread runs)."""
+    import shutil
+
+    from surveil.synth import scene
+
+    out = tmp_path / "shared"
+    render = scene._render
+    theirs = []
+
+    def render_while_another_finishes(*args, **kwargs):
+        summary = render(*args, **kwargs)
+        shutil.copytree(small_recording, out)  # the other process's rename
+        theirs.append((out / "cam0.csv").stat().st_ino)
+        return summary
+
+    monkeypatch.setattr(scene, "_render", render_while_another_finishes)
+    synthesise(small_scenario, out)
+    assert (out / "cam0.csv").stat().st_ino == theirs[0]
+    assert [p.name for p in tmp_path.iterdir()] == ["shared"]  # no temporary left
+
+
 def test_another_scene_seed_is_another_take_of_the_same_script(
     small_scenario, small_recording, tmp_path
 ):
