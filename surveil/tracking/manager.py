@@ -221,6 +221,9 @@ class _Pending:
     # init_prior_min, has count 0: it may only re-acquire a lost target)
     seen: int = 0
     head_only: bool = False  # its candidate is evidence of a head only (a crown head)
+    # frame sets seen in a run that may skip single frame sets (``reacquire_bridge``; 0: the
+    # seed bridged no gap, its run is ``seen``). Only a lost target's re-acquisition reads it
+    bridged_seen: int = 0
 
 
 class MultiTargetTracker:
@@ -262,6 +265,7 @@ class MultiTargetTracker:
         self._states = np.zeros((0, sir.STATE_DIM))
         self._persons: dict[int, _Person] = {}
         self._pending: list[_Pending] = []
+        self._unseen: list[_Pending] = []  # last frame set's seeds not continued in this one
         self._next_id = 1
         self._next_person = 1
         self._last_t_ns: int | None = None
@@ -778,6 +782,7 @@ class MultiTargetTracker:
         combined = [tr for tr in self._tracks.values() if tr.phase is Phase.COMBINED]
         seeds: list[_Pending] = []
         taken_prev: set[int] = set()
+        bridge_from = self._unseen if lc.reacquire_bridge else []
         for k in kept:
             strong = prior[k] >= lc.init_prior_min
             best, best_key = -1, (True, lc.init_gate_m)
@@ -788,6 +793,11 @@ class MultiTargetTracker:
                 if i not in taken_prev and d <= lc.init_gate_m and key <= best_key:
                     best, best_key = i, key
             prev = self._pending[best] if best >= 0 else None
+            bridged = 0
+            if prev is None:
+                bridged = self._bridged_seen(pts[k], bridge_from)
+            elif prev.bridged_seen:
+                bridged = prev.bridged_seen + 1
             seen = 1 if prev is None else prev.seen + 1
             if prev is not None and (prev.count > 0 or not strong):
                 taken_prev.add(best)
@@ -800,6 +810,7 @@ class MultiTargetTracker:
                     dict(prev.pair_first_m),
                     seen,
                     bool(self._head_only[k]),
+                    bridged,
                 )
             else:
                 if prev is not None:
@@ -811,12 +822,27 @@ class MultiTargetTracker:
                     t_ns,
                     seen=seen,
                     head_only=bool(self._head_only[k]),
+                    bridged_seen=bridged,
                 )
             for tr in combined:
                 seed.pair_first_m.setdefault(tr.id, float(np.linalg.norm(pts[k] - tr.mean_m)))
             seeds.append(seed)
+        if lc.reacquire_bridge:
+            self._unseen = [p for i, p in enumerate(self._pending) if i not in taken_prev]
         self._pending = seeds
         return seeds
+
+    def _bridged_seen(self, point_m: np.ndarray, unseen: list[_Pending]) -> int:
+        """The run a candidate at ``point_m`` continues across one frame set without it
+        (``reacquire_bridge``): 1 + the frame sets seen of the nearest seed of the frame set
+        before last that was not continued last time, within ``init_gate_m``; 0 if none."""
+        if not unseen:
+            return 0
+        d = np.linalg.norm(np.array([p.position_m for p in unseen]) - point_m, axis=1)
+        i = int(d.argmin())
+        if d[i] > self.cfg.lifecycle.init_gate_m:
+            return 0
+        return 1 + max(unseen[i].seen, unseen[i].bridged_seen)
 
     def _log_unexplained(self, pts: np.ndarray, t_ns: int) -> None:
         """Remember this frame set's unexplained candidates (``pts``, owned by the log from
@@ -1558,6 +1584,9 @@ class MultiTargetTracker:
                     and tr.limb.is_hand
                     and tr.since_miss < lc.drift_window_frames
                     and (lc.reacquire_supported or tr.misses > 0)
+                    and not (
+                        tr.misses == 0 and self._on_a_candidate(tr, lc.reacquire_supported_near_m)
+                    )
                 ):
                     continue
                 head = self._active_head(tr.person)
@@ -1574,13 +1603,17 @@ class MultiTargetTracker:
         sp = np.array([sd.position_m for sd in seeds])
         confirmed = np.array([sd.seen >= lc.init_confirm_frames for sd in seeds])
         d = np.linalg.norm(last[:, None] - sp[None], axis=2)
+        bridged = np.array([sd.bridged_seen >= lc.init_confirm_frames for sd in seeds])
+        confirmed = np.where(
+            np.arange(len(rows_tr))[:, None] < len(lost), confirmed | bridged, confirmed
+        )
         hands = np.array([tr.limb.is_hand and tr.person > 0 for tr in rows_tr])
         since = [
             tr.last_good_ns if hand else (tr.lost_since_ns or t_ns)
             for tr, hand in zip(lost, hands[: len(lost)], strict=True)
         ] + [tr.miss_from_ns for tr in unsupported]
         gate = self._reacquire_gate_m((t_ns - np.array(since)) * 1e-9, hands)
-        ok = (d <= gate[:, None]) & (confirmed[None] | (d <= lc.reacquire_near_m))
+        ok = (d <= gate[:, None]) & (confirmed | (d <= lc.reacquire_near_m))
         if unsupported:
             strong = np.array([sd.count >= lc.init_confirm_frames for sd in seeds])
             to_head = np.linalg.norm(sp[None] - np.array(their_heads)[:, None], axis=2)
@@ -1604,6 +1637,12 @@ class MultiTargetTracker:
         cost = np.where(ok, d, 1e6)
         rows, cols = linear_sum_assignment(cost)
         return {rows_tr[r].id: int(c) for r, c in zip(rows, cols, strict=True) if cost[r, c] < 1e6}
+
+    def _on_a_candidate(self, tr: _Track, radius_m: float) -> bool:
+        """A candidate of this frame set lies within ``radius_m`` of the tracker's estimate."""
+        if radius_m <= 0 or not len(self._pts):
+            return False
+        return bool(np.linalg.norm(self._pts - tr.mean_m, axis=1).min() <= radius_m)
 
     def _on_a_head(self, points_m: np.ndarray, radius_m: float) -> np.ndarray:
         """(S,) bool: each point is within ``radius_m`` of an active head tracker's estimate

@@ -347,6 +347,20 @@ class LifecycleConfig:
         "supports now (a hand swung up past the face drew its tracker onto a ghost 0.4 m "
         "away while its tracker followed it 20 cm behind)",
     )
+    reacquire_bridge: bool = setting(
+        False,
+        "a lost target is also re-acquired by a seed whose run of init_confirm_frames frame "
+        "sets skipped single frame sets (a hand reaching past the edge of a table, its "
+        "candidate there two frame sets in three); starting a new tracker still needs an "
+        "unbroken run",
+    )
+    reacquire_supported_near_m: float = setting(
+        0.0,
+        "with reacquire_supported on, a tracker supported in this frame set is not restarted "
+        "while a candidate lies within this distance of its estimate (it follows its hand; "
+        "0 = no such exception, m)",
+        min=0.0,
+    )
     reacquire_with_body: bool = setting(
         True,
         "a lost hand of a person whose head is tracked is re-acquired around its last position "

@@ -2156,6 +2156,37 @@ def test_a_hand_seen_again_just_before_its_tracker_is_lost_keeps_its_tracker(rig
         assert near.target_id != before["p1/right_hand"]
 
 
+@pytest.mark.parametrize("bridge", [True, False])
+def test_a_lost_hand_whose_candidate_shows_two_frame_sets_in_three_is_reacquired(rig, rng, bridge):
+    """A right hand reaches for a box past a table's edge, hidden long enough for its
+    tracker to be lost; at the box its candidate is there two frame sets in three (the
+    three_people scene, p3 at 8.9-9.7 s), so no seed lasts ``init_confirm_frames`` in a row.
+    With ``reacquire_bridge`` the lost tracker takes a seed whose run skipped those single
+    frame sets and follows the hand again; without it the hand stays lost. No new tracker
+    starts either way: a new one still needs an unbroken run."""
+    p = body((2.0, 2.0), 0.0)
+    at_box = p["right_hand"] + 0.3 * p["fwd"] + [0.0, 0.0, 0.1]
+    frames = [[p["head"], p["left_hand"], p["right_hand"]] for _ in range(30)]
+    frames += [[p["head"], p["left_hand"]] for _ in range(6)]
+    n_hidden = len(frames)
+    for k in range(12):
+        frames.append([p["head"], p["left_hand"]] + ([at_box] if k % 3 != 2 else []))
+    cfg = TrackingConfig(
+        lifecycle=LifecycleConfig(retire_unclaimed_s=0.0, reacquire_bridge=bridge)
+    )
+    out = run(MultiTargetTracker(cfg, rig, seed=4), frames, rng)
+    hand_id = {s.label: s.target_id for s in out[29].targets}["p1/right_hand"]
+    lost = [t for f in out[30:n_hidden] for t in f.transitions if t.new is Phase.LOST]
+    assert [t.target_id for t in lost] == [hand_id]
+    assert not [t for f in out[n_hidden:] for t in f.transitions if t.old is Phase.UNINITIALISED]
+    hand = {s.target_id: s for s in out[-2].targets}[hand_id]
+    if bridge:
+        assert hand.phase is not Phase.LOST
+        assert np.linalg.norm(hand.mean_m - at_box) < 0.05
+    else:
+        assert hand.phase is Phase.LOST
+
+
 @pytest.mark.parametrize("on", [True, False])
 def test_a_hand_that_outran_its_tracker_is_not_taken_by_its_lost_other_hand(rig, rng, on):
     """The right hand is hidden and its tracker lost; then the left hand jumps 37 cm out
@@ -2268,13 +2299,17 @@ def test_a_lost_hand_rising_to_the_face_is_reacquired_there(rig, rng):
     assert hand_id in {s.target_id for s in near}
 
 
-@pytest.mark.parametrize("supported", [False, True])
-def test_a_hand_swung_up_past_a_ghost_keeps_the_tracker_that_follows_it(rig, rng, supported):
+@pytest.mark.parametrize(("supported", "near_m"), [(False, 0.0), (True, 0.0), (True, 0.1)])
+def test_a_hand_swung_up_past_a_ghost_keeps_the_tracker_that_follows_it(
+    rig, rng, supported, near_m
+):
     """A right hand swung up (the negative scene's wave, 5.8-6.1 s) loses its candidate for
     two frame sets while a ghost shows 0.4 m in front of it; the hand's candidate is back
     beside its tracker, which followed it, in the frame set the ghost's seed confirms. With
     ``reacquire_supported`` off the tracker, supported again, stays on the hand; on (the
-    session-77 rule as it was) it is restarted on the ghost, and a new tracker takes the hand."""
+    session-77 rule as it was) it is restarted on the ghost, and a new tracker takes the hand;
+    on with ``reacquire_supported_near_m`` 0.1 m it is spared, a candidate being that near
+    it (session 95)."""
     p = body((2.0, 2.0), 0.0)
     rise = [p["right_hand"] + [0.0, 0.0, 0.06 * k] for k in range(12)]
     ghost = p["right_hand"] + 0.4 * p["fwd"] + [0.0, 0.0, 0.3]
@@ -2283,14 +2318,18 @@ def test_a_hand_swung_up_past_a_ghost_keeps_the_tracker_that_follows_it(rig, rng
     frames += [[p["head"], p["left_hand"], ghost] for k in range(3, 5)]
     frames += [[p["head"], p["left_hand"], rise[k], ghost] for k in range(5, 12)]
     cfg = TrackingConfig(
-        lifecycle=LifecycleConfig(retire_unclaimed_s=0.0, reacquire_supported=supported)
+        lifecycle=LifecycleConfig(
+            retire_unclaimed_s=0.0,
+            reacquire_supported=supported,
+            reacquire_supported_near_m=near_m,
+        )
     )
     out = run(MultiTargetTracker(cfg, rig, seed=3), frames, rng)
     before = {s.label: s.target_id for s in out[29].targets}
     assert set(before) == {"p1/head", "p1/left_hand", "p1/right_hand"}
     on_hand = min(out[-1].targets, key=lambda s: np.linalg.norm(s.mean_m - rise[-1]))
     assert np.linalg.norm(on_hand.mean_m - rise[-1]) < 0.1
-    if supported:
+    if supported and not near_m:
         assert on_hand.target_id != before["p1/right_hand"]
     else:
         assert on_hand.target_id == before["p1/right_hand"]
