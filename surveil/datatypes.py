@@ -211,6 +211,34 @@ class CandidateSet:
     def empty(cls) -> CandidateSet:
         return cls(np.zeros((0, 3)), np.zeros(0))
 
+    def with_points(self, points_m: np.ndarray, prior: float, views: np.ndarray) -> CandidateSet:
+        """This set followed by ``points_m`` (E, 3) that no camera pair made (a stage's
+        own evidence): prior ``prior``, ``views`` (E,) the views behind each; their
+        ``cam_pairs`` and ``blob_pairs`` rows are -1, ``half_gap_m`` NaN, ``rescued`` and
+        ``head_only`` false."""
+        e = len(points_m)
+        if not e:
+            return self
+
+        def rows(a: np.ndarray | None, fill: object) -> np.ndarray | None:
+            if a is None:
+                return None
+            return np.concatenate([a, np.full((e, *a.shape[1:]), fill, a.dtype)])
+
+        n = len(self.points_m)
+        return CandidateSet(
+            points_m=np.concatenate([self.points_m, points_m]),
+            prior=np.concatenate([self.prior, np.full(e, prior)]),
+            half_gap_m=rows(self.half_gap_m, np.nan),
+            cam_pairs=rows(self.cam_pairs, -1),
+            blob_pairs=rows(self.blob_pairs, -1),
+            rescued=rows(self.rescued, False),
+            head_only=rows(self.head_only, False),
+            views=np.concatenate(
+                [np.full(n, 2, np.int64) if self.views is None else self.views, views]
+            ).astype(np.int64),
+        )
+
 
 @dataclass(frozen=True, slots=True)
 class ActivityEvent:

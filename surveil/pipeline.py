@@ -48,7 +48,7 @@ from surveil.recon.candidates import make_candidates
 from surveil.recon.crowns import people_from_crowns, silhouette_crowns
 from surveil.recon.settings import CandidateConfig
 from surveil.tracking import MultiTargetTracker, TrackingConfig
-from surveil.tracking.blob_pull import pull_hands_onto_blobs
+from surveil.tracking.blob_pull import one_view_hand_points, pull_hands_onto_blobs
 
 log = logging.getLogger(__name__)
 
@@ -365,6 +365,19 @@ class Pipeline:
                 self.cfg.arms,
                 self.cfg.candidates.support_radius_px,
             )
+        tcfg = self.cfg.tracking
+        if tcfg.one_view_prior > 0 and not learning:
+            points, n_views = one_view_hand_points(
+                self.tracker.predicted_targets(fs.t_ns),
+                candidates.points_m,
+                observations,
+                self.rig,
+                tcfg.blob_pull_sigma_px,
+                tcfg.blob_pull_gate_px,
+                tcfg.blob_pull_floor_m,
+                tcfg.lifecycle.explained_radius_m,
+            )
+            candidates = candidates.with_points(points, tcfg.one_view_prior, n_views)
         t1 = time.perf_counter()
         track = self.tracker.step(fs.t_ns, candidates, observations)
         self._n_heads = sum(
@@ -372,7 +385,6 @@ class Pipeline:
         )
         # the filter's own estimates: what the front end is fed back stays the tracker's
         self._people_m = self._protected_people(fs.t_ns, track.targets)
-        tcfg = self.cfg.tracking
         if tcfg.blob_pull_sigma_px > 0:
             track = dataclasses.replace(
                 track,

@@ -81,22 +81,4 @@ def with_arm_hands(
     their ``cam_pairs`` and ``blob_pairs`` rows are -1, ``half_gap_m`` NaN (no camera
     pair made them), ``rescued`` and ``head_only`` false, ``views`` 1."""
     extra = arm_hand_points(candidates, poses, observations, rig, cfg, support_radius_px)
-    if not len(extra):
-        return candidates
-    e = len(extra)
-
-    def rows(a: np.ndarray | None, fill: float) -> np.ndarray | None:
-        if a is None:
-            return None
-        return np.concatenate([a, np.full((e, *a.shape[1:]), fill, a.dtype)])
-
-    return CandidateSet(
-        points_m=np.concatenate([candidates.points_m, extra]),
-        prior=np.concatenate([candidates.prior, np.full(e, cfg.feed_prior)]),
-        half_gap_m=rows(candidates.half_gap_m, np.nan),
-        cam_pairs=rows(candidates.cam_pairs, -1),
-        blob_pairs=rows(candidates.blob_pairs, -1),
-        rescued=rows(candidates.rescued, False),
-        head_only=rows(candidates.head_only, False),
-        views=rows(candidates.views, 1),  # one view's arm model
-    )
+    return candidates.with_points(extra, cfg.feed_prior, np.ones(len(extra), np.int64))

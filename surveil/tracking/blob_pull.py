@@ -112,3 +112,45 @@ def pull_hands_onto_blobs(
         point = np.linalg.solve(prec + info[k], prec @ t.mean_m + rhs[k])
         out[active[k]] = dataclasses.replace(t, mean_m=point)
     return tuple(out)
+
+
+def one_view_hand_points(
+    predicted: tuple[TargetSnapshot, ...],
+    candidates_m: np.ndarray,
+    observations: Mapping[str, CameraObservation],
+    rig: Rig,
+    sigma_px: float,
+    gate_px: float,
+    prior_floor_m: float,
+    explained_m: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Points for labelled hands that no candidate explains but a blob still shows.
+
+    A hand seen by one camera has no candidate (a candidate needs two views), so its
+    tracker coasts and is lost ``lost_frames`` later, although that view says where it is
+    across its line of sight (three_people: p3's left hand at the box, one view for 0.6 s).
+    For each labelled hand in the normal phase, predicted to this frame set, with no
+    candidate within ``explained_m``: the most probable point given its prediction and the
+    blobs at its projection (as :func:`pull_hands_onto_blobs`; mutual nearest among every
+    active target, heads too).
+
+    Returns
+    -------
+    points_m : (E, 3) -- one per such hand that a blob shows
+    n_views : (E,) int -- views whose blob contributed
+    """
+    active = [t for t in predicted if t.phase is not Phase.LOST]
+    if not active:
+        return np.zeros((0, 3)), np.zeros(0, np.int64)
+    pts = np.array([t.mean_m for t in active])
+    wanted = np.array([t.limb.is_hand and t.phase is Phase.NORMAL for t in active])
+    if len(candidates_m) and wanted.any():
+        wanted &= cdist(pts, candidates_m).min(axis=1) > explained_m
+    info, rhs, n_views = blob_evidence(pts, wanted, observations, rig, sigma_px, gate_px)
+    out = []
+    for k in np.flatnonzero(n_views):
+        t = active[k]
+        prec = np.linalg.inv(t.cov_m2 + prior_floor_m**2 * np.eye(3))
+        out.append(np.linalg.solve(prec + info[k], prec @ t.mean_m + rhs[k]))
+    keep = n_views[n_views > 0]
+    return np.array(out).reshape(-1, 3), keep.astype(np.int64)

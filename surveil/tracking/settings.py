@@ -676,6 +676,14 @@ class TrackingConfig:
     labelling: LabellingConfig = setting(
         default_factory=LabellingConfig, doc="head / hand, person, left / right labels"
     )
+    one_view_prior: float = setting(
+        0.0,
+        "a labelled hand that no candidate explains but a blob at its projection shows gets a "
+        "candidate there (the pull's point from its prediction, blob_pull_* settings) with "
+        "this prior, so that a hand seen by one camera is not lost (0 = off), unitless",
+        min=0.0,
+        max=1.0,
+    )
     blob_pull_sigma_px: float = setting(
         8.0,
         "a labelled hand's reported point is pulled onto the blobs at its projection, each a "

@@ -5,8 +5,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from surveil.datatypes import BlobSet, CameraObservation, Limb, Phase, Silhouettes, TargetSnapshot
-from surveil.tracking.blob_pull import pull_hands_onto_blobs
+from surveil.datatypes import (
+    BlobSet,
+    CameraObservation,
+    CandidateSet,
+    Limb,
+    Phase,
+    Silhouettes,
+    TargetSnapshot,
+)
+from surveil.tracking.blob_pull import one_view_hand_points, pull_hands_onto_blobs
 
 HAND = np.array([2.4, 1.9, 1.1])
 SIGMA_PX, GATE_PX, FLOOR_M = 2.0, 25.0, 0.05
@@ -123,3 +131,43 @@ def test_a_blob_beyond_the_gate_pulls_nothing(rig):
         (one,), observe(rig, {cam.name: [HAND]}), rig, SIGMA_PX, GATE_PX, FLOOR_M
     )
     assert out[0] is one
+
+
+def test_a_hand_no_candidate_explains_gets_a_point_from_the_one_view_that_shows_it(rig):
+    """``one_view_hand_points``: a labelled hand seen by one camera has no candidate; the
+    blob at its projection gives it a point on that blob's line of sight, from its
+    prediction. A hand with a candidate near it, a hand no blob shows and a head get none."""
+    cam = rig.cameras[0]
+    estimate = HAND + sideways(cam, 0.05)
+    other_hand = HAND + np.array([0.0, 0.8, 0.0])
+    head = HAND + np.array([0.3, 0.0, 0.6])
+    predicted = (
+        target(1, estimate),
+        target(2, other_hand, limb=Limb.LEFT_HAND),
+        target(3, head, limb=Limb.HEAD),
+    )
+    seen = observe(rig, {cam.name: [HAND, head]})
+    points, n_views = one_view_hand_points(
+        predicted, np.zeros((0, 3)), seen, rig, SIGMA_PX, GATE_PX, FLOOR_M, 0.15
+    )
+    assert points.shape == (1, 3) and n_views.tolist() == [1]
+    assert line_distance_m(cam, points[0], HAND) < 0.5 * line_distance_m(cam, estimate, HAND)
+    explained = one_view_hand_points(
+        predicted, estimate[None] + 0.03, seen, rig, SIGMA_PX, GATE_PX, FLOOR_M, 0.15
+    )
+    assert len(explained[0]) == 0
+
+
+def test_points_added_to_a_candidate_set_say_that_no_camera_pair_made_them():
+    base = CandidateSet(
+        np.array([[1.0, 1.0, 1.0]]),
+        np.array([0.9]),
+        cam_pairs=np.array([[0, 1]]),
+        blob_pairs=np.array([[2, 3]]),
+    )
+    out = base.with_points(np.array([[2.0, 1.0, 1.0]]), 0.5, np.array([1]))
+    assert out.prior.tolist() == [0.9, 0.5]
+    assert out.cam_pairs.tolist() == [[0, 1], [-1, -1]]
+    assert out.blob_pairs.tolist() == [[2, 3], [-1, -1]]
+    assert out.views.tolist() == [2, 1]
+    assert base.with_points(np.zeros((0, 3)), 0.5, np.zeros(0, np.int64)) is base
