@@ -108,10 +108,19 @@ def pull_hands_onto_blobs(
     out = list(targets)
     for k in np.flatnonzero(n_views):
         t = targets[active[k]]
-        prec = np.linalg.inv(t.cov_m2 + prior_floor_m**2 * np.eye(3))
-        point = np.linalg.solve(prec + info[k], prec @ t.mean_m + rhs[k])
+        point = most_probable_point(t, prior_floor_m, info[k], rhs[k])
         out[active[k]] = dataclasses.replace(t, mean_m=point)
     return tuple(out)
+
+
+def most_probable_point(
+    target: TargetSnapshot, prior_floor_m: float, info: np.ndarray, rhs: np.ndarray
+) -> np.ndarray:
+    """(3,) the point maximising the target's Gaussian (``mean_m``, ``cov_m2`` +
+    ``prior_floor_m``^2 I) times the blob terms ``info`` (3, 3) and ``rhs`` (3,) of
+    :func:`blob_evidence`: one 3 x 3 solve."""
+    prec = np.linalg.inv(target.cov_m2 + prior_floor_m**2 * np.eye(3))
+    return np.linalg.solve(prec + info, prec @ target.mean_m + rhs)
 
 
 def one_view_hand_points(
@@ -147,10 +156,6 @@ def one_view_hand_points(
     if len(candidates_m) and wanted.any():
         wanted &= cdist(pts, candidates_m).min(axis=1) > explained_m
     info, rhs, n_views = blob_evidence(pts, wanted, observations, rig, sigma_px, gate_px)
-    out = []
-    for k in np.flatnonzero(n_views):
-        t = active[k]
-        prec = np.linalg.inv(t.cov_m2 + prior_floor_m**2 * np.eye(3))
-        out.append(np.linalg.solve(prec + info[k], prec @ t.mean_m + rhs[k]))
-    keep = n_views[n_views > 0]
-    return np.array(out).reshape(-1, 3), keep.astype(np.int64)
+    seen = np.flatnonzero(n_views)
+    out = [most_probable_point(active[k], prior_floor_m, info[k], rhs[k]) for k in seen]
+    return np.array(out).reshape(-1, 3), n_views[seen].astype(np.int64)
