@@ -1154,7 +1154,7 @@ class MultiTargetTracker:
             and not c.demoted
             and c.born_ns > pair.joined_ns
             and np.linalg.norm(c.mean_m - pair.mean_m) >= lc.separate_distance_m
-            and np.linalg.norm(self._pts - c.mean_m, axis=1).min() <= lc.explained_radius_m
+            and self._on_a_candidate(c, lc.explained_radius_m)
             and not self._there_as_pair_joined(pair, c.mean_m, c.born_ns)
         ]
 
@@ -1601,12 +1601,13 @@ class MultiTargetTracker:
             + [self._before_miss_m(tr) for tr in unsupported]
         )
         sp = np.array([sd.position_m for sd in seeds])
-        confirmed = np.array([sd.seen >= lc.init_confirm_frames for sd in seeds])
-        d = np.linalg.norm(last[:, None] - sp[None], axis=2)
-        bridged = np.array([sd.bridged_seen >= lc.init_confirm_frames for sd in seeds])
-        confirmed = np.where(
-            np.arange(len(rows_tr))[:, None] < len(lost), confirmed | bridged, confirmed
+        seen = np.array([sd.seen >= lc.init_confirm_frames for sd in seeds])
+        confirmed = np.repeat(seen[None], len(rows_tr), axis=0)
+        # a run that bridged single gaps counts for the lost rows only (reacquire_bridge)
+        confirmed[: len(lost)] |= np.array(
+            [sd.bridged_seen >= lc.init_confirm_frames for sd in seeds]
         )
+        d = np.linalg.norm(last[:, None] - sp[None], axis=2)
         hands = np.array([tr.limb.is_hand and tr.person > 0 for tr in rows_tr])
         since = [
             tr.last_good_ns if hand else (tr.lost_since_ns or t_ns)
