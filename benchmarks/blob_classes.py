@@ -19,6 +19,12 @@ shadow): what ``[blobs] min_changed_share`` at that value would drop.
 YCrCb's Cr and Cb below 30 / 40 / 50): what a test that asks a blob for a flat core
 would drop. Colour fringes (a shirt blended with the wall, JPEG chroma bleeding) lie on
 chroma edges across their whole width; a hand has a flat inside.
+
+``--face-chroma`` adds a table: per class, the fraction of its blobs whose mean chroma
+(YCrCb's Cr, Cb) lies more than 6 / 8 / 10 / 12 from that of every face in the same view
+(the blob under a true head's projection, the face blobs themselves not counted): what a
+test asking a hand to have the colour of a face in its view would weaken or drop. A
+person's hands and face share a skin tone; a fringe on a red or olive shirt does not.
 """
 
 from __future__ import annotations
@@ -33,7 +39,9 @@ import numpy as np
 from front_end import observe_recording
 
 from surveil.blobs.extract import pixel_share
-from surveil.io.ground_truth import MaskClass, load_ground_truth
+from surveil.camera import Camera
+from surveil.datatypes import CameraObservation, FrameSet
+from surveil.io.ground_truth import GroundTruth, MaskClass, load_ground_truth
 from surveil.io.recording import open_recording
 from surveil.pipeline import load_pipeline_config
 from surveil.synth.scene import synthesise
@@ -44,6 +52,31 @@ ROOT = Path(__file__).resolve().parents[1]
 SHARE_LIMITS = (0.2, 0.3, 0.4, 0.5)
 FLAT_LIMITS = (30.0, 40.0, 50.0)
 FLAT_MIN_PX = 3
+FACE_CHROMA_LIMITS = (6.0, 8.0, 10.0, 12.0)
+FACE_SEARCH_PX = 6  # a face blob: the most common blob within this of a head's projection
+
+
+def blob_chroma(img: np.ndarray, labels: np.ndarray, n: int) -> np.ndarray:
+    """(n + 1, 2) mean Cr, Cb (YCrCb, 0..255) of each blob ``labels == k`` (row 0 unused)."""
+    inside = labels > 0
+    ycc = cv2.cvtColor(img[inside][None], cv2.COLOR_BGR2YCrCb)[0].astype(np.float64)
+    lab = labels[inside]
+    area = np.maximum(np.bincount(lab, minlength=n + 1), 1)
+    return np.column_stack([np.bincount(lab, ycc[:, k], n + 1) / area for k in (1, 2)])
+
+
+def face_blobs(labels: np.ndarray, heads_px: np.ndarray) -> list[int]:
+    """Blob labels (1-based) of the faces: the most common blob within ``FACE_SEARCH_PX``
+    of each head projection ((H, 2) u, v in the image)."""
+    h, w = labels.shape
+    faces = set()
+    for u, v in np.rint(heads_px).astype(int):
+        r = FACE_SEARCH_PX
+        ids = labels[max(v - r, 0) : min(v + r + 1, h), max(u - r, 0) : min(u + r + 1, w)]
+        ids = ids[ids > 0]
+        if len(ids):
+            faces.add(int(np.bincount(ids).argmax()))
+    return sorted(faces)
 
 
 def flat_pixels(img: np.ndarray, labels: np.ndarray, box: np.ndarray, blob: int) -> np.ndarray:
@@ -65,13 +98,17 @@ def blob_classes(
     config,
     shares: dict[str, list[float]] | None = None,
     flat: dict[str, list[np.ndarray]] | None = None,
+    face: dict[str, list[float]] | None = None,
 ) -> tuple[Counter, Counter]:
     """(blobs per mask class name, background blobs per camera) over a recording; with
     ``shares``, each blob's changed share is appended to its class's list; with ``flat``,
-    its :func:`flat_pixels`."""
+    its :func:`flat_pixels`; with ``face``, the chroma distance from it to the nearest face
+    of its view (:func:`blob_chroma`, :func:`face_blobs`; views without a face blob are
+    skipped)."""
     rec = open_recording(rec_dir)
     gt = load_ground_truth(rec_dir)
     n_people = len({lab.split("/")[0] for lab in gt.labels})
+    heads = [i for i, lab in enumerate(gt.labels) if lab.endswith("/head")]
     by_class: Counter = Counter()
     background_by_cam: Counter = Counter()
     for fs, by_name, _ in observe_recording(rec, config, n_people, changed=shares is not None):
@@ -90,8 +127,13 @@ def blob_classes(
             changed = None
             if shares is not None:
                 changed = pixel_share(labels, obs.silhouettes.changed, len(obs.blobs) + 1)
+            to_face = None
+            if face is not None:
+                to_face = _chroma_to_faces(fs, cam, obs, gt, heads, rec.rig[cam])
             for b in np.flatnonzero(counts[1:].sum(axis=1) > 0):
                 k = int(counts[b + 1].argmax())
+                if to_face is not None and np.isfinite(to_face[b]):
+                    face.setdefault(MaskClass(k).name, []).append(float(to_face[b]))
                 by_class[MaskClass(k).name] += 1
                 if k == MaskClass.BACKGROUND:
                     background_by_cam[cam] += 1
@@ -101,6 +143,31 @@ def blob_classes(
                     got = flat_pixels(fs.images[cam], labels, obs.blobs.bboxes_px[b], int(b))
                     flat.setdefault(MaskClass(k).name, []).append(got)
     return by_class, background_by_cam
+
+
+def _chroma_to_faces(
+    fs: FrameSet,
+    cam: str,
+    obs: CameraObservation,
+    gt: GroundTruth,
+    heads: list[int],
+    camera: Camera,
+) -> np.ndarray | None:
+    """(B,) chroma distance of each blob of ``obs`` to the nearest face of the view (inf for
+    the faces themselves), or None when no true head projects onto a blob."""
+    f = int(np.argmin(np.abs(gt.t_ns - fs.t_ns)))
+    head_m = gt.positions_m[f, heads]
+    head_m = head_m[np.isfinite(head_m).all(axis=1)]
+    if not len(head_m):
+        return None
+    px, depth = camera.project(head_m)
+    faces = face_blobs(obs.blobs.labels, px[camera.in_image(px, depth)])
+    if not faces:
+        return None
+    chroma = blob_chroma(fs.images[cam], obs.blobs.labels, len(obs.blobs))
+    d = np.linalg.norm(chroma[1:, None] - chroma[faces][None], axis=2).min(axis=1)
+    d[np.array(faces) - 1] = np.inf
+    return d
 
 
 def _class_rows(stem: str, names: list[str], by_class: dict | None, shares_below) -> list[str]:
@@ -130,6 +197,11 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="also the share of each class's blobs without a flat-chroma core",
     )
+    parser.add_argument(
+        "--face-chroma",
+        action="store_true",
+        help="also the share of each class's blobs whose chroma is far from every face's",
+    )
     args = parser.parse_args(argv)
     config = load_pipeline_config(args.config)
     paths = [ROOT / "recordings" / f"{n}.toml" for n in args.names] or sorted(
@@ -139,13 +211,17 @@ def main(argv: list[str] | None = None) -> int:
     print("Share of the blobs by the ground-truth class under most of their pixels:\n")
     print("| scenario | blobs | " + " | ".join(names) + " | background blobs by camera |")
     print("|---|---|" + "---|" * len(names) + "---|")
-    share_rows, flat_rows = [], []
+    share_rows, flat_rows, face_rows = [], [], []
     for path in paths:
         rec_dir = args.out / path.stem
         synthesise(path, rec_dir)
         shares: dict[str, list[float]] | None = {} if args.changed_shares else None
         flat: dict[str, list[np.ndarray]] | None = {} if args.flat_cores else None
-        by_class, by_cam = blob_classes(rec_dir, config, shares, flat)
+        face: dict[str, list[float]] | None = {} if args.face_chroma else None
+        by_class, by_cam = blob_classes(rec_dir, config, shares, flat, face)
+        face_rows += _class_rows(
+            path.stem, names, face, lambda got: [np.mean(got > lim) for lim in FACE_CHROMA_LIMITS]
+        )
         share_rows += _class_rows(
             path.stem, names, shares, lambda got: [np.mean(got < lim) for lim in SHARE_LIMITS]
         )
@@ -171,6 +247,15 @@ def main(argv: list[str] | None = None) -> int:
         print(f"| scenario | class | blobs | {limits} |")
         print("|---|---|---|" + "---|" * len(FLAT_LIMITS))
         print("\n".join(flat_rows))
+    if face_rows:
+        print(
+            "\nShare of each class's blobs whose mean chroma (Cr, Cb) is farther than the limit"
+            " from every face's in the view:\n"
+        )
+        limits = " | ".join(f"> {lim:g}" for lim in FACE_CHROMA_LIMITS)
+        print(f"| scenario | class | blobs | {limits} |")
+        print("|---|---|---|" + "---|" * len(FACE_CHROMA_LIMITS))
+        print("\n".join(face_rows))
     return 0
 
 
