@@ -69,9 +69,9 @@ def face_blobs(labels: np.ndarray, heads_px: np.ndarray) -> list[int]:
     """Blob labels (1-based) of the faces: the most common blob within ``FACE_SEARCH_PX``
     of each head projection ((H, 2) u, v in the image)."""
     h, w = labels.shape
+    r = FACE_SEARCH_PX
     faces = set()
     for u, v in np.rint(heads_px).astype(int):
-        r = FACE_SEARCH_PX
         ids = labels[max(v - r, 0) : min(v + r + 1, h), max(u - r, 0) : min(u + r + 1, w)]
         ids = ids[ids > 0]
         if len(ids):
@@ -155,7 +155,7 @@ def _chroma_to_faces(
 ) -> np.ndarray | None:
     """(B,) chroma distance of each blob of ``obs`` to the nearest face of the view (inf for
     the faces themselves), or None when no true head projects onto a blob."""
-    f = int(np.argmin(np.abs(gt.t_ns - fs.t_ns)))
+    f = gt.frame_at(fs.t_ns)
     head_m = gt.positions_m[f, heads]
     head_m = head_m[np.isfinite(head_m).all(axis=1)]
     if not len(head_m):
@@ -180,6 +180,17 @@ def _class_rows(stem: str, names: list[str], by_class: dict | None, shares_below
             cells = " | ".join(f"{v:.3f}" for v in shares_below(got))
             rows.append(f"| {stem} | {name} | {len(got)} | {cells} |")
     return rows
+
+
+def _print_class_table(what: str, limits: list[str], rows: list[str]) -> None:
+    """A Markdown table of :func:`_class_rows` rows under "Share of each class's blobs
+    ``what``:", one column per limit; nothing when there are no rows."""
+    if not rows:
+        return
+    print(f"\nShare of each class's blobs {what}:\n")
+    print("| scenario | class | blobs | " + " | ".join(limits) + " |")
+    print("|---|---|---|" + "---|" * len(limits))
+    print("\n".join(rows))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -232,30 +243,22 @@ def main(argv: list[str] | None = None) -> int:
         cells = " | ".join(f"{by_class[n] / total:.3f}" for n in names)
         cams = ", ".join(f"{c} {by_cam[c]}" for c in sorted(by_cam))
         print(f"| {path.stem} | {sum(by_class.values())} | {cells} | {cams} |", flush=True)
-    if share_rows:
-        print("\nShare of each class's blobs with less than this share of changed pixels:\n")
-        limits = " | ".join(f"< {lim}" for lim in SHARE_LIMITS)
-        print(f"| scenario | class | blobs | {limits} |")
-        print("|---|---|---|" + "---|" * len(SHARE_LIMITS))
-        print("\n".join(share_rows))
-    if flat_rows:
-        print(
-            f"\nShare of each class's blobs with fewer than {FLAT_MIN_PX} pixels of flat chroma"
-            " (Sobel magnitude of Cr, Cb below the limit):\n"
-        )
-        limits = " | ".join(f"< {lim:g}" for lim in FLAT_LIMITS)
-        print(f"| scenario | class | blobs | {limits} |")
-        print("|---|---|---|" + "---|" * len(FLAT_LIMITS))
-        print("\n".join(flat_rows))
-    if face_rows:
-        print(
-            "\nShare of each class's blobs whose mean chroma (Cr, Cb) is farther than the limit"
-            " from every face's in the view:\n"
-        )
-        limits = " | ".join(f"> {lim:g}" for lim in FACE_CHROMA_LIMITS)
-        print(f"| scenario | class | blobs | {limits} |")
-        print("|---|---|---|" + "---|" * len(FACE_CHROMA_LIMITS))
-        print("\n".join(face_rows))
+    _print_class_table(
+        "with less than this share of changed pixels",
+        [f"< {lim}" for lim in SHARE_LIMITS],
+        share_rows,
+    )
+    _print_class_table(
+        f"with fewer than {FLAT_MIN_PX} pixels of flat chroma (Sobel magnitude of Cr, Cb "
+        "below the limit)",
+        [f"< {lim:g}" for lim in FLAT_LIMITS],
+        flat_rows,
+    )
+    _print_class_table(
+        "whose mean chroma (Cr, Cb) is farther than the limit from every face's in the view",
+        [f"> {lim:g}" for lim in FACE_CHROMA_LIMITS],
+        face_rows,
+    )
     return 0
 
 

@@ -67,7 +67,7 @@ def measure(rec_dir: Path, cfg: PipelineConfig, max_frames: int | None) -> dict:
         if fs.index < cfg.background.learning_frames:
             continue
         cands = make_candidates(list(obs.values()), rec.rig, cfg.candidates)
-        g = int(np.argmin(np.abs(gt.t_ns - fs.t_ns)))
+        g = gt.frame_at(fs.t_ns)
         for j, label in enumerate(gt.labels):
             truth = gt.positions_m[g, j]
             views = [c for k, c in enumerate(cams) if gt.visible[g, j, k] and c in obs]

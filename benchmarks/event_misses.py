@@ -76,7 +76,7 @@ def _actor_tracks(
     states = np.full(len(frames), 255)
     target_rows = np.full(len(frames), -1)
     for k, f in enumerate(frames):
-        g = int(np.argmin(np.abs(gt.t_ns - run.frame_t_ns[f])))
+        g = gt.frame_at(run.frame_t_ns[f])
         truth = gt.positions_m[g, j]
         span = run.frame_rows(int(f))
         rows = np.arange(span.start, span.stop)
@@ -110,7 +110,7 @@ def trace(event: ActivityEvent, run: RunData, gt: GroundTruth, gate_m: float) ->
     rows = [_actor_tracks(run, gt, a, frames, gate_m)[2] for a in actors]
     lines = []
     for k, f in enumerate(frames):
-        g = int(np.argmin(np.abs(gt.t_ns - run.frame_t_ns[f])))
+        g = gt.frame_at(run.frame_t_ns[f])
         cells = [f"{(run.frame_t_ns[f] - event.climax_ns) / 1e9:+.2f}s"]
         for a, r in zip(actors, rows, strict=True):
             if r[k] < 0:

@@ -96,7 +96,7 @@ def measure(rec_dir: Path, cfg, max_frames: int | None) -> tuple[int, dict]:
             continue
         n_sets += 1
         cands = make_candidates(list(obs.values()), rec.rig, cfg.candidates)
-        g = int(np.argmin(np.abs(gt.t_ns - fs.t_ns)))
+        g = gt.frame_at(fs.t_ns)
         limbs = gt.positions_m[g]
         limbs = limbs[np.isfinite(limbs).all(axis=1)]
         head_m = gt.positions_m[g, heads]

@@ -131,7 +131,7 @@ def main(argv: list[str] | None = None) -> int:
     cands = make_candidates(observations, rec.rig, cfg.candidates)
     truth_f = None
     if gt is not None:
-        truth_f = int(np.argmin(np.abs(gt.t_ns - fs.t_ns)))
+        truth_f = gt.frame_at(fs.t_ns)
 
     tiles = []
     for name, obs in by_name.items():

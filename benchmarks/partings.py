@@ -52,7 +52,7 @@ VERDICTS = ("kept", "swapped", "ghost")
 def _nearest_limb(gt: GroundTruth, t_ns: int, point_m: np.ndarray) -> tuple[int, float]:
     """Index and distance (m) of the true limb nearest ``point_m`` at the ground-truth frame
     nearest ``t_ns``."""
-    f = int(np.argmin(np.abs(gt.t_ns - t_ns)))
+    f = gt.frame_at(t_ns)
     d = np.linalg.norm(gt.positions_m[f] - point_m, axis=1)
     d = np.where(np.isfinite(d), d, np.inf)
     k = int(np.argmin(d))

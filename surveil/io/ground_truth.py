@@ -108,6 +108,10 @@ class GroundTruth:
     def fps(self) -> float:
         return float(self.meta["fps"])
 
+    def frame_at(self, t_ns: int) -> int:
+        """Index of the truth frame nearest to time ``t_ns`` (ns, the recording clock)."""
+        return int(np.argmin(np.abs(self.t_ns - t_ns)))
+
 
 def event_to_dict(ev: ActivityEvent) -> dict:
     return {

@@ -152,3 +152,8 @@ def test_facing_at_an_unknown_frame_is_reported_with_the_line(tmp_path):
     facing.write_text("\n".join(lines) + "\n")
     with pytest.raises(InputError, match=r"facing\.csv:3: frame 99 is not a frame"):
         load_ground_truth(tmp_path)
+
+
+def test_frame_at_picks_the_truth_frame_nearest_in_time():
+    gt = make_truth()  # frames every 66.7 ms from 0
+    assert [gt.frame_at(t) for t in (-5, 30_000_000, 40_000_000, 10**12)] == [0, 0, 1, 3]
