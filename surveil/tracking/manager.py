@@ -853,35 +853,51 @@ class MultiTargetTracker:
             log_.popleft()
 
     def _there_as_pair_joined(self, pair: _Track, seed_m: np.ndarray, first_ns: int) -> bool:
-        """True if a seed at ``seed_m`` (or a tracker there since ``first_ns``) was there
-        before, as the pair joined, and has since vanished and come back: an unexplained
-        candidate within ``init_gate_m`` of it, before its present run of frame sets (which
-        began at ``first_ns``), so close in time to the joining that neither of the pair's
-        targets could have been there (at ``leave_speed_mps`` a hand needs (distance - gate)
-        / speed to get from where the pair joined to the seed). Such a seed is not a target
-        leaving the pair but something that stood beside it (a ghost from skin-coloured
-        clothes beside shaking hands). A seed whose present run began that early is not
-        judged: its own steady evidence says the joining was not of two targets (a tracker
-        that slid onto the other's hand while its own went home). Also true if another
-        labelled target (normal) stood there when the pair joined (:meth:`_stood_there`):
-        that target's tracker has drifted off it since (:meth:`_return_drifted`). (Not an
-        unlabelled tracker: one left over where a hand rested before it reached out marks
-        that hand's home, where it comes back.)"""
+        """True if a seed at ``seed_m`` (or a tracker there since ``first_ns``) was there as
+        the combined pair ``pair`` joined (:meth:`_there_as_joined`), judged from either of
+        its two trackers. Each keeps where it was as they joined (0.25 m apart in the case
+        below: hands whose blobs merged), so the time a target needs to reach the seed
+        differs between them; judged from one alone, the pair's fate would depend on which
+        of its trackers asks first. Demo take 101 with the bare-forearm option, seed 0, 4.33
+        s: a ghost 0.59 m from the pair, seen there 0.13 s before the hands joined, lay just
+        outside the nearer tracker's window and inside the farther one's; the pair parted
+        onto it while the hands still held the ball, and the exchange read as a place
+        (docs/benchmarks.md, session 98)."""
+        partner = self._tracks.get(pair.partner) if pair.partner is not None else None
+        members = [pair] if partner is None or partner.partner != pair.id else [pair, partner]
+        return any(self._there_as_joined(t, seed_m, first_ns) for t in members)
+
+    def _there_as_joined(self, tr: _Track, seed_m: np.ndarray, first_ns: int) -> bool:
+        """:meth:`_there_as_pair_joined` from one tracker ``tr`` of the pair: True if a seed
+        at ``seed_m`` (or a tracker there since ``first_ns``) was there before, as the pair
+        joined, and has since vanished and come back: an unexplained candidate within
+        ``init_gate_m`` of it, before its present run of frame sets (which began at
+        ``first_ns``), so close in time to the joining that neither of the pair's targets
+        could have been there (at ``leave_speed_mps`` a hand needs (distance - gate) / speed
+        to get from where ``tr`` was as the pair joined to the seed). Such a seed is not a
+        target leaving the pair but something that stood beside it (a ghost from
+        skin-coloured clothes beside shaking hands). A seed whose present run began that
+        early is not judged: its own steady evidence says the joining was not of two targets
+        (a tracker that slid onto the other's hand while its own went home). Also true if
+        another labelled target (normal) stood there when the pair joined
+        (:meth:`_stood_there`): that target's tracker has drifted off it since
+        (:meth:`_return_drifted`). (Not an unlabelled tracker: one left over where a hand
+        rested before it reached out marks that hand's home, where it comes back.)"""
         lc = self.cfg.lifecycle
-        if pair.joined_ns is None or pair.joined_m is None:
+        if tr.joined_ns is None or tr.joined_m is None:
             return False
-        travel_s = max(float(np.linalg.norm(seed_m - pair.joined_m)) - lc.init_gate_m, 0.0)
+        travel_s = max(float(np.linalg.norm(seed_m - tr.joined_m)) - lc.init_gate_m, 0.0)
         travel_ns = travel_s / lc.leave_speed_mps * 1e9
-        start_ns = pair.joined_ns - travel_ns
-        stop_ns = min(pair.joined_ns + travel_ns, first_ns)
+        start_ns = tr.joined_ns - travel_ns
+        stop_ns = min(tr.joined_ns + travel_ns, first_ns)
         for t_ns, pts in self._unexplained_log:  # oldest first
             if t_ns >= stop_ns:
                 break
             if t_ns > start_ns and (np.linalg.norm(pts - seed_m, axis=1) <= lc.init_gate_m).any():
                 return True
-        if any(np.linalg.norm(g - seed_m) <= lc.init_gate_m for g in pair.ghosts_m):
+        if any(np.linalg.norm(g - seed_m) <= lc.init_gate_m for g in tr.ghosts_m):
             return True
-        return self._stood_there(pair, seed_m) is not None
+        return self._stood_there(tr, seed_m) is not None
 
     def _stood_there(self, pair: _Track, seed_m: np.ndarray) -> int | None:
         """The id of the labelled target whose estimate was nearest ``seed_m``, within

@@ -1171,6 +1171,37 @@ def test_a_ghost_that_stood_beside_the_hands_as_they_joined_does_not_part_them(
         assert min(splits) < joined[1]
 
 
+def test_a_seed_beside_a_pair_gets_one_verdict_from_both_of_its_trackers(rig, rng):
+    """Whether a seed was there as a combined pair joined (something beside it, not a
+    target leaving it) is one verdict for the pair. Its two trackers joined where each was,
+    apart, so a sighting of the seed just before the joining can lie in the window of the
+    farther tracker (sooner than a target could have come from there) but not of the
+    nearer. Asked from the nearer alone, the pair parted onto a ghost while the hands still
+    held the ball (demo take 101 with the bare-forearm option, docs/benchmarks.md, session
+    98); the answer must not depend on which tracker asks."""
+    frames, _, _, _ = shaking_hands(hold=10)
+    trk = MultiTargetTracker(TrackingConfig(), rig, seed=14)
+    run(trk, frames, rng)
+    pair = [t for t in trk._tracks.values() if t.phase is Phase.COMBINED]
+    assert len(pair) == 2 and pair[0].partner == pair[1].id and pair[1].partner == pair[0].id
+    near, far = pair
+    lc = trk.cfg.lifecycle
+    axis = near.joined_m - far.joined_m
+    assert np.linalg.norm(axis) > 1e-3  # they joined where each was, apart
+    seed_m = near.joined_m + 0.5 * axis / np.linalg.norm(axis)  # beyond the pair, nearer `near`
+    d_near, d_far = (np.linalg.norm(seed_m - t.joined_m) - lc.init_gate_m for t in pair)
+    seen_ns = near.joined_ns - int(0.5 * (d_near + d_far) / lc.leave_speed_mps * 1e9)
+    log = list(trk._unexplained_log)
+    at = sum(t_ns <= seen_ns for t_ns, _ in log)
+    trk._unexplained_log.clear()
+    trk._unexplained_log.extend([*log[:at], (seen_ns, seed_m[None, :]), *log[at:]])
+    first_ns = near.joined_ns + 10**9  # the seed's present run began long after
+    assert trk._there_as_joined(far, seed_m, first_ns)
+    assert not trk._there_as_joined(near, seed_m, first_ns)
+    assert trk._there_as_pair_joined(near, seed_m, first_ns)
+    assert trk._there_as_pair_joined(far, seed_m, first_ns)
+
+
 def test_a_hand_whose_tracker_drifted_off_it_does_not_part_a_pair(rig, rng):
     """Two people shake right hands. While the hands are joined, b's resting left hand loses
     its candidate to one 35 cm above it (a blob pair on b's shirt) and its tracker follows it
