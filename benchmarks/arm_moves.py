@@ -1,14 +1,21 @@
 """How many blobs the bare-forearm option moves to a hand end, per scene (docs/blobs.md, "Bare
 forearms").
 
-    python benchmarks/arm_moves.py [--config TOML] [--sheet PNG] [NAME ...]
+    python benchmarks/arm_moves.py [--config TOML] [--sheet PNG] [--by-limb] [NAME ...]
 
 Runs the front end (``benchmarks/front_end.py``, N_h the true number of people) with the given
 settings (default: the defaults with ``[blobs] arm_length_rel = 0.17``) and counts the blobs
-whose point :func:`surveil.blobs.extract.hand_ends` moves off their centre of mass. Only one
-scene has people in short sleeves (negative's p2); on the others every move is a blob taken
-for a forearm that is not one. ``--sheet`` writes a contact sheet of the first moves of the
-last scene (old point blue, new point red, the blob green) to look at what moved.
+whose point :func:`surveil.blobs.extract.hand_ends` moves off their centre of mass, and
+judges each move against the ground truth: the true head or hand (visible in that camera,
+projected through the recording's rig) nearest to either point, within ``JUDGE_PX``, is the
+blob's limb; the move is *toward* it when the new point lies nearer to it than the centre
+of mass did, else *away*; with no limb that near, *no limb*. "gain px" is the median of (old
+distance - new distance) over the judged moves. negative's p2 wears short sleeves; in
+three_people most moves are hands joined to a colour fringe along a sleeve, moved onto the
+hand (docs/blobs.md, "Bare forearms"); elsewhere a move is a blob taken for a forearm that is
+not one. ``--by-limb`` adds the same per true limb. ``--sheet`` writes
+a contact sheet of the first moves of the last scene (old point blue, new point red, the
+blob green) to look at what moved.
 """
 
 from __future__ import annotations
@@ -32,10 +39,38 @@ from surveil.pipeline import load_pipeline_config
 
 ROOT = Path(__file__).resolve().parents[1]
 TILE_PX = 120
+JUDGE_PX = 40.0  # a blob's point this near a true limb's projection is that limb's
 
 
-def count_moves(rec_dir: Path, cfg, sheet_tiles: int = 0) -> tuple[int, int, list[np.ndarray]]:
-    """Blobs seen, blobs moved and up to ``sheet_tiles`` crops of the moved ones."""
+def judge_move(
+    old_px: np.ndarray, new_px: np.ndarray, limbs_px: np.ndarray
+) -> tuple[int, float] | None:
+    """(index of the true limb the moved blob belongs to, old minus new distance to it, px)
+    for a blob point moved from ``old_px`` to ``new_px`` ((2,) each), given the true limbs'
+    projections ``limbs_px`` ((L, 2)); None when no limb lies within ``JUDGE_PX`` of either
+    point.
+
+    >>> judge_move(np.array([0.0, 0]), np.array([0.0, 10]), np.array([[0.0, 12], [50, 50]]))
+    (0, 10.0)
+    >>> judge_move(np.array([0.0, 0]), np.array([0.0, 10]), np.array([[90.0, 90]])) is None
+    True
+    """
+    if not len(limbs_px):
+        return None
+    d_old = np.linalg.norm(limbs_px - old_px, axis=1)
+    d_new = np.linalg.norm(limbs_px - new_px, axis=1)
+    j = int(np.argmin(np.minimum(d_old, d_new)))
+    if min(d_old[j], d_new[j]) > JUDGE_PX:
+        return None
+    return j, float(d_old[j] - d_new[j])
+
+
+def count_moves(
+    rec_dir: Path, cfg, sheet_tiles: int = 0
+) -> tuple[int, int, dict[str, list[float]], list[np.ndarray]]:
+    """Blobs seen, blobs moved, the judged moves' gains (px, :func:`judge_move`) by true
+    limb label (``"no limb"``: no gain, one entry per move) and up to ``sheet_tiles`` crops
+    of the moved ones."""
     pending: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # old, new, blob pixels
     by_blobset: dict[int, list] = {}  # id of a BlobSet -> its moves
     plain_ends, plain_extract = extract.hand_ends, pipeline.extract_blobs
@@ -53,12 +88,16 @@ def count_moves(rec_dir: Path, cfg, sheet_tiles: int = 0) -> tuple[int, int, lis
         return blobs
 
     gt = load_ground_truth(rec_dir)
+    rec = open_recording(rec_dir)
     n_people = len({label.split("/")[0] for label in gt.labels})
     n_blobs = n_moved = 0
+    gains: dict[str, list[float]] = {}
     tiles: list[np.ndarray] = []
     extract.hand_ends, pipeline.extract_blobs = ends_spy, extract_spy
     try:
-        for fs, observations, _ in observe_recording(open_recording(rec_dir), cfg, n_people):
+        for fs, observations, _ in observe_recording(rec, cfg, n_people):
+            row = int(np.searchsorted(gt.frames, fs.index))
+            has_truth = row < len(gt.frames) and gt.frames[row] == fs.index
             for cam, obs in observations.items():
                 n_blobs += len(obs.blobs)
                 moves = by_blobset.pop(id(obs.blobs), [])
@@ -69,13 +108,33 @@ def count_moves(rec_dir: Path, cfg, sheet_tiles: int = 0) -> tuple[int, int, lis
                 shift = (
                     np.zeros(2) if region is None else np.array([region[1].start, region[0].start])
                 )
+                if has_truth and moves:
+                    truth = gt.positions_m[row]
+                    seen = gt.visible[row, :, gt.cameras.index(cam)] & np.isfinite(truth).all(1)
+                    limbs_px = rec.rig[cam].project(truth[seen])[0] if seen.any() else np.zeros(0)
+                    labels = [gt.labels[j] for j in np.flatnonzero(seen)]
+                    for old, new, _ in moves:
+                        judged = judge_move(old + shift, new + shift, limbs_px)
+                        if judged is None:
+                            gains.setdefault("no limb", []).append(np.nan)
+                        else:
+                            gains.setdefault(labels[judged[0]], []).append(judged[1])
                 for old, new, px in moves[: max(sheet_tiles - len(tiles), 0)]:
                     tiles.append(_tile(fs.images[cam], old + shift, new + shift, px + shift))
                     cv2.putText(tiles[-1], f"{fs.index} {cam}", (3, 14), 0, 0.45, (255,) * 3)
             by_blobset.clear()
     finally:
         extract.hand_ends, pipeline.extract_blobs = plain_ends, plain_extract
-    return n_blobs, n_moved, tiles
+    return n_blobs, n_moved, gains, tiles
+
+
+def verdict_cells(gains: list[float]) -> str:
+    """``toward | away | no limb | gain px`` cells of a table row from judged gains."""
+    g = np.asarray(gains, dtype=np.float64)
+    judged = g[np.isfinite(g)]
+    median = f"{np.median(judged):+.1f}" if len(judged) else "-"
+    toward, away = int((judged > 0).sum()), int((judged <= 0).sum())
+    return f"{toward} | {away} | {int(np.isnan(g).sum())} | {median}"
 
 
 def _tile(image: np.ndarray, old: np.ndarray, new: np.ndarray, px: np.ndarray) -> np.ndarray:
@@ -99,17 +158,28 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=ROOT / "out" / "bench_synth")
     parser.add_argument("--config", type=Path, help="settings (default: the option on)")
     parser.add_argument("--sheet", type=Path, help="contact sheet PNG of the last scene's moves")
+    parser.add_argument("--by-limb", action="store_true", help="also a row per true limb")
     args = parser.parse_args(argv)
     cfg = load_pipeline_config(args.config)
     if args.config is None:
         cfg = dataclasses.replace(cfg, blobs=dataclasses.replace(cfg.blobs, arm_length_rel=0.17))
     names = scene_names(args)
-    print("| scenario | blobs | moved | share |")
-    print("|---|---|---|---|")
+    print("| scenario | blobs | moved | share | toward | away | no limb | gain px |")
+    print("|---|---|---|---|---|---|---|---|")
     for i, name in enumerate(names):
         last = i == len(names) - 1 and args.sheet is not None
-        n_blobs, n_moved, tiles = count_moves(render(name, args.out), cfg, 15 if last else 0)
-        print(f"| {name} | {n_blobs} | {n_moved} | {n_moved / max(n_blobs, 1):.4f} |", flush=True)
+        n_blobs, n_moved, gains, tiles = count_moves(
+            render(name, args.out), cfg, 15 if last else 0
+        )
+        every = [g for limb_gains in gains.values() for g in limb_gains]
+        print(
+            f"| {name} | {n_blobs} | {n_moved} | {n_moved / max(n_blobs, 1):.4f} | "
+            f"{verdict_cells(every)} |",
+            flush=True,
+        )
+        if args.by_limb:
+            for limb in sorted(gains):
+                print(f"| {name} {limb} | | {len(gains[limb])} | | {verdict_cells(gains[limb])} |")
         if last and tiles:
             blank = np.zeros_like(tiles[0])
             rows = [
