@@ -85,73 +85,6 @@ def _open_keeping_isolated(
     return opened | restored, restored
 
 
-def _rejoin_cut_forearms(
-    before: np.ndarray, after: np.ndarray, sil: np.ndarray, silhouettes: Silhouettes, cfg
-) -> np.ndarray | None:
-    """The pixels of the skin regions of ``before`` (8-connected) that the opening cut into
-    two or more pieces of ``after`` and that, whole, pass the bare-forearm test
-    (:func:`forearm_blobs`, ``BlobConfig.arm_*``): a forearm cut at its thin wrist, which
-    the blob stage keeps whole (``BlobConfig.arm_rejoin``). None when there are none.
-
-    before, after : (H, W) bool -- the skin inside the silhouettes before and after the
-        opening;  sil : (H, W) int -- the (dilated) silhouette labels;  silhouettes : with
-        ``centres_px`` (the shoulder points)
-    """
-    x, y, w, h = cv2.boundingRect(before.view(np.uint8))
-    if not (w and h):
-        return None
-    box = slice(y, y + h), slice(x, x + w)
-    n_reg, regions = cv2.connectedComponents(
-        np.ascontiguousarray(before[box]).view(np.uint8), connectivity=8, ltype=cv2.CV_32S
-    )
-    n_pieces, pieces = cv2.connectedComponents(
-        np.ascontiguousarray(after[box]).view(np.uint8), connectivity=8, ltype=cv2.CV_32S
-    )
-    kept = after[box]
-    # every piece lies in one region: count the distinct pieces of each region
-    pairs = np.unique(regions[kept].astype(np.int64) * n_pieces + pieces[kept])
-    cut_ids = np.flatnonzero(np.bincount(pairs // n_pieces, minlength=n_reg) >= 2)
-    cut_ids = cut_ids[cut_ids > 0]
-    if not len(cut_ids):
-        return None
-    index = np.full(n_reg, -1, np.int64)
-    index[cut_ids] = np.arange(len(cut_ids))
-    of_px = np.take(index, regions)
-    ys, xs = np.nonzero(of_px >= 0)
-    region_of = of_px[ys, xs]
-    k = len(cut_ids)
-    sil_px = sil[box][ys, xs]
-    sil_of = _majority_silhouette(region_of, sil_px, k, int(sil.max()) + 1)
-    top = np.asarray(silhouettes.top_v_px)[sil_of - 1] - y
-    heights = np.asarray(silhouettes.bottom_v_px)[sil_of - 1] - y - top + 1.0
-    shoulders = np.column_stack(
-        [silhouettes.centres_px[sil_of - 1, 0] - x, top + SHOULDER_DROP_REL * heights]
-    )
-    pixels = np.column_stack([xs, ys]).astype(np.float64)
-    count = np.maximum(np.bincount(region_of, minlength=k), 1)
-    centroids = np.column_stack(
-        [np.bincount(region_of, pixels[:, j], k) / count for j in range(2)]
-    )
-    arm, _ = forearm_blobs(
-        pixels,
-        region_of,
-        centroids,
-        shoulders,
-        heights,
-        cfg.arm_length_rel,
-        cfg.arm_max_length_rel,
-        cfg.arm_min_width_rel,
-        cfg.arm_zone,
-    )
-    if not arm.any():
-        return None
-    out = np.zeros_like(before)
-    lut = np.zeros(n_reg, bool)
-    lut[cut_ids[arm]] = True
-    out[box] = np.take(lut, regions)
-    return out
-
-
 def _majority_silhouette(
     blob_px: np.ndarray, sil_px: np.ndarray, n_blobs: int, n_sil: int
 ) -> np.ndarray:
@@ -418,69 +351,6 @@ def revealed_background(
     return ghost & (counts >= MIN_OUTLINE_PX)
 
 
-def forearm_blobs(
-    pixels_px: np.ndarray,
-    blob_of: np.ndarray,
-    centroids_px: np.ndarray,
-    shoulders_px: np.ndarray,
-    body_heights_px: np.ndarray,
-    arm_length_rel: float,
-    arm_max_length_rel: float,
-    arm_min_width_rel: float,
-    arm_zone: bool = False,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Which blobs are shaped like a bare forearm with its hand (:func:`hand_ends` has the
-    test), and each blob's principal axis: (B,) bool and (B, 2) unit vectors. Arguments as
-    :func:`hand_ends`'s.
-
-    >>> yy, xx = np.mgrid[0:40, 0:4]  # a vertical bar 40 px long, 4 px wide
-    >>> px = np.column_stack([xx.ravel(), yy.ravel()]).astype(float)
-    >>> arm, axis = forearm_blobs(px, np.zeros(len(px), int), px.mean(axis=0, keepdims=True),
-    ...                           np.array([[1.5, -20.0]]), np.array([100.0]), 0.17, 0.5, 0.035)
-    >>> arm.tolist(), np.abs(axis).round(2).tolist()
-    ([True], [[0.0, 1.0]])
-    """
-    n = len(centroids_px)
-    d = pixels_px - centroids_px[blob_of]
-    count = np.maximum(np.bincount(blob_of, minlength=n), 1)
-    sxx = np.bincount(blob_of, d[:, 0] ** 2, n) / count
-    syy = np.bincount(blob_of, d[:, 1] ** 2, n) / count
-    sxy = np.bincount(blob_of, d[:, 0] * d[:, 1], n) / count
-    # major eigenvalue and its direction of each 2x2 covariance
-    half_diff = 0.5 * (sxx - syy)
-    root = np.hypot(half_diff, sxy)
-    major = 0.5 * (sxx + syy) + root
-    minor = np.maximum(0.5 * (sxx + syy) - root, 0.0)
-    angle = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)
-    axis = np.column_stack([np.cos(angle), np.sin(angle)])
-    length = np.sqrt(12.0 * major)
-    min_width = arm_min_width_rel * body_heights_px
-    arm = (
-        (length > arm_length_rel * body_heights_px)
-        & (length < arm_max_length_rel * body_heights_px)
-        & (major > ARM_ASPECT**2 * minor)
-        & (12.0 * minor >= min_width**2)
-        & (count >= arm_length_rel * body_heights_px * min_width)
-    )
-    if arm_zone and arm.any():
-        # a face with its neck or an ear with its neck, seen from the side or behind, is as long
-        # and thin as a forearm, and so is a shin in skin-coloured trousers: a forearm lies
-        # between the head and the shins, or beside the head when raised (one raised in front
-        # of the face keeps its centre of mass)
-        top = np.full(n, np.inf)
-        bottom = np.full(n, -np.inf)
-        np.minimum.at(top, blob_of, pixels_px[:, 1])
-        np.maximum.at(bottom, blob_of, pixels_px[:, 1])
-        silhouette_top = shoulders_px[:, 1] - SHOULDER_DROP_REL * body_heights_px
-        below_face = top > silhouette_top + HEAD_ZONE_REL * body_heights_px
-        beside_head = np.abs(centroids_px[:, 0] - shoulders_px[:, 0]) > (
-            HEAD_HALF_WIDTH_REL * body_heights_px
-        )
-        arm &= below_face | beside_head
-        arm &= bottom < silhouette_top + KNEE_REL * body_heights_px
-    return arm, axis
-
-
 def hand_ends(
     pixels_px: np.ndarray,
     blob_of: np.ndarray,
@@ -537,24 +407,49 @@ def hand_ends(
     ...           0.17, 0.5, 0.035, 0.1).round(2).tolist()
     [[1.5, 34.0]]
     """
+    n = len(centroids_px)
     out = centroids_px.copy()
-    if len(centroids_px) == 0 or len(pixels_px) == 0:
+    if n == 0 or len(pixels_px) == 0:
         return out
-    arm, axis = forearm_blobs(
-        pixels_px,
-        blob_of,
-        centroids_px,
-        shoulders_px,
-        body_heights_px,
-        arm_length_rel,
-        arm_max_length_rel,
-        arm_min_width_rel,
-        arm_zone,
+    d = pixels_px - centroids_px[blob_of]
+    count = np.maximum(np.bincount(blob_of, minlength=n), 1)
+    sxx = np.bincount(blob_of, d[:, 0] ** 2, n) / count
+    syy = np.bincount(blob_of, d[:, 1] ** 2, n) / count
+    sxy = np.bincount(blob_of, d[:, 0] * d[:, 1], n) / count
+    # major eigenvalue and its direction of each 2x2 covariance
+    half_diff = 0.5 * (sxx - syy)
+    root = np.hypot(half_diff, sxy)
+    major = 0.5 * (sxx + syy) + root
+    minor = np.maximum(0.5 * (sxx + syy) - root, 0.0)
+    angle = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)
+    axis = np.column_stack([np.cos(angle), np.sin(angle)])
+    length = np.sqrt(12.0 * major)
+    min_width = arm_min_width_rel * body_heights_px
+    arm = (
+        (length > arm_length_rel * body_heights_px)
+        & (length < arm_max_length_rel * body_heights_px)
+        & (major > ARM_ASPECT**2 * minor)
+        & (12.0 * minor >= min_width**2)
+        & (count >= arm_length_rel * body_heights_px * min_width)
     )
+    if arm_zone and arm.any():
+        # a face with its neck or an ear with its neck, seen from the side or behind, is as long
+        # and thin as a forearm, and so is a shin in skin-coloured trousers: a forearm lies
+        # between the head and the shins, or beside the head when raised (one raised in front
+        # of the face keeps its centre of mass)
+        top = np.full(n, np.inf)
+        bottom = np.full(n, -np.inf)
+        np.minimum.at(top, blob_of, pixels_px[:, 1])
+        np.maximum.at(bottom, blob_of, pixels_px[:, 1])
+        silhouette_top = shoulders_px[:, 1] - SHOULDER_DROP_REL * body_heights_px
+        below_face = top > silhouette_top + HEAD_ZONE_REL * body_heights_px
+        beside_head = np.abs(centroids_px[:, 0] - shoulders_px[:, 0]) > (
+            HEAD_HALF_WIDTH_REL * body_heights_px
+        )
+        arm &= below_face | beside_head
+        arm &= bottom < silhouette_top + KNEE_REL * body_heights_px
     if not arm.any():
         return out
-    n = len(centroids_px)
-    d = pixels_px - centroids_px[blob_of]
     # point each arm's axis away from its silhouette's shoulder point
     away = np.einsum("bi,bi->b", centroids_px - shoulders_px, axis)
     axis *= np.where(away < 0, -1.0, 1.0)[:, None]
@@ -721,17 +616,12 @@ def _extract(
         inside &= changed
     restored = None
     if radius_px > 0:
-        before = inside
         if cfg.open_keeps_isolated:
             inside, restored = _open_keeping_isolated(
                 inside, 2 * radius_px + 1, cfg.min_blob_area_px
             )
         else:
             inside = _open(inside, 2 * radius_px + 1)
-        if cfg.arm_length_rel > 0 and cfg.arm_rejoin and silhouettes.centres_px is not None:
-            rejoined = _rejoin_cut_forearms(before, inside, sil, silhouettes, cfg)
-            if rejoined is not None:
-                inside = inside | rejoined
     n_all, labels, stats, centroids = components_with_stats(inside)
     areas = stats[1:, cv2.CC_STAT_AREA].astype(np.int64)
     ok = np.flatnonzero(areas >= max(cfg.min_blob_area_px, 1))

@@ -288,13 +288,6 @@ class BlobConfig:
         "0.1, lies beside the head (a face or an ear with its neck, seen from the side or "
         "behind, is too); false = anywhere in the silhouette, as before session 89",
     )
-    arm_rejoin: bool = setting(
-        True,
-        "with arm_length_rel > 0: a skin region that the opening cut into pieces is kept whole "
-        "when, whole, it is shaped like a bare forearm (the tests above): the opening cuts a "
-        "forearm where it is thinnest, at the wrist, and its elbow-side piece then gives a "
-        "point near the elbow; false = the pieces, as before session 99",
-    )
     hand_length_rel: float = setting(
         0.11,
         "... the hand end: the centre of mass of the blob's last this much (times the "

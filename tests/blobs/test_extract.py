@@ -291,41 +291,6 @@ def test_a_fringe_as_long_as_a_forearm_but_thin_or_sparse_keeps_its_centre():
     assert extract_blobs(thin, sil, no_width_bound).centroids_px[0] == pytest.approx([70.5, 69.0])
 
 
-def test_a_forearm_the_opening_cuts_at_its_wrist_is_kept_whole():
-    """The opening cuts thin bridges between limbs, and a bare forearm's wrist is thin too:
-    cut there, the elbow-side piece gives a point near the elbow beside the hand's (session
-    99: a candidate there pulled negative's hand tracker up the arm). With ``arm_rejoin`` a
-    region that the opening cut into pieces and that, whole, is shaped like a forearm stays
-    whole, and its point is the uncut arm's hand end; so is one whose elbow-side piece is too
-    short to be an arm alone. Two hands joined by a thin bridge (not forearm-shaped) stay
-    two blobs."""
-    sil = _one_person()
-    cfg = dataclasses.replace(BARE_ARMS, open_px=11, hand_length_rel=0.1)  # a 3 px opening
-    arm = np.zeros((H, W), bool)
-    arm[50:66, 70:75] = True  # forearm
-    arm[66:69, 72] = True  # the wrist, one pixel wide
-    arm[69:75, 70:75] = True  # hand
-    uncut = extract_blobs(arm, sil, dataclasses.replace(cfg, open_px=0))
-    assert uncut.centroids_px[0] == pytest.approx([72.0, 71.09], abs=0.01)
-    pieces = extract_blobs(arm, sil, dataclasses.replace(cfg, arm_rejoin=False))
-    assert len(pieces) == 2 and pieces.centroids_px[0][1] < 65  # the forearm piece's point
-    rejoined = extract_blobs(arm, sil, cfg)
-    assert rejoined.areas_px.tolist() == uncut.areas_px.tolist()
-    assert rejoined.centroids_px == pytest.approx(uncut.centroids_px)
-    short = arm.copy()
-    short[50:58] = False  # the elbow-side piece, 8 rows, is no arm alone; whole, 17 rows, is
-    assert len(extract_blobs(short, sil, dataclasses.replace(cfg, arm_rejoin=False))) == 2
-    (point,) = extract_blobs(short, sil, cfg).centroids_px
-    assert point == pytest.approx(uncut.centroids_px[0])
-    hands = np.zeros((H, W), bool)
-    hands[50:56, 60:66] = True
-    hands[53, 66:69] = True  # a one-pixel bridge
-    hands[50:56, 69:75] = True
-    assert len(extract_blobs(hands, sil, cfg)) == 2
-    off = dataclasses.replace(cfg, arm_length_rel=0.0)  # the option off: pieces, as always
-    assert len(extract_blobs(arm, sil, off)) == 2
-
-
 def test_dilation_takes_in_skin_just_outside_the_silhouette():
     sil = _one_person()
     skin = np.zeros((H, W), bool)
