@@ -19,6 +19,14 @@ modes they took. Each is judged:
 Ghost partings are what the tracker's separation rules are about (docs/tracking.md,
 "Separation"); ``--list`` prints each parting: time, trackers, the limb and distance of each
 mode.
+
+``--routes`` runs the pipeline again (the MCAPs are rewritten, the same runs) with a spy on
+the tracker's separation, and the listing also says how each pair parted (``modes``: its
+modes moved ``separate_gain_m`` apart; ``far apart``: they stayed ``separate_far_m`` apart;
+``seeds``: it parted onto seeds, ``fixed`` when the parting gave each tracker its mode;
+``never met``), how far apart its modes first appeared (m) and the prior and supporting views
+of the far mode's candidate then (modes routes only): the figures of docs/benchmarks.md,
+session 99.
 """
 
 from __future__ import annotations
@@ -47,6 +55,72 @@ from pipeline_bench import (  # noqa: E402
 )
 
 VERDICTS = ("kept", "swapped", "ghost")
+
+
+@dataclass(frozen=True)
+class Route:
+    """How the tracker parted a pair (``--routes``): the route, the distance (m) between its
+    modes when they first appeared, and the far mode's candidate then: prior and views (-1
+    when unknown)."""
+
+    route: str
+    first_m: float
+    far_prior: float
+    far_views: int
+
+
+class RouteSpy:
+    """Records, while active, how every combined pair the tracker separates parted, by (time
+    of the frame set, ns; the two tracker ids)."""
+
+    def __init__(self) -> None:
+        self.routes: dict[tuple[int, frozenset[int]], Route] = {}
+        self._first: dict[tuple[int, int], tuple[float, int]] = {}
+
+    def __enter__(self) -> RouteSpy:
+        from surveil.tracking import manager
+
+        self._cls = manager.MultiTargetTracker
+        self._measure, self._separate = self._cls._measure_separation, self._cls._separate
+        spy = self
+
+        def measure(trk, pts, prior, dt_s, t_ns):
+            spy._measure(trk, pts, prior, dt_s, t_ns)
+            for tr, _ in trk._combined_pairs():
+                if tr.split_m is not None and tr.apart_frames == 1 and len(pts):
+                    k = int(np.argmin(np.linalg.norm(pts - tr.split_m[1], axis=1)))
+                    views = int(trk._views[k]) if len(trk._views) == len(pts) else -1
+                    spy._first[(id(trk), tr.id)] = (float(prior[k]), views)
+
+        def separate(trk, a, b, t_ns, met=True):
+            if a.split_m is not None:
+                lc = trk.cfg.lifecycle
+                if a.split_fixed is not None and b.split_fixed is not None:
+                    route = "fixed"
+                elif not met:
+                    route = "never met"
+                elif not np.isfinite(a.split_gain_m):
+                    route = "seeds"
+                elif a.split_gain_m >= lc.separate_gain_m:
+                    route = "modes"
+                else:
+                    route = "far apart"
+                prior, views = (
+                    spy._first.get((id(trk), a.id), (np.nan, -1))
+                    if route in ("modes", "far apart")
+                    else (np.nan, -1)
+                )
+                first = float(a.split_first_m) if route != "seeds" else np.nan
+                spy.routes[(int(t_ns), frozenset((a.id, b.id)))] = Route(
+                    route, first, prior, views
+                )
+            spy._separate(trk, a, b, t_ns, met)
+
+        self._cls._measure_separation, self._cls._separate = measure, separate
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._cls._measure_separation, self._cls._separate = self._measure, self._separate
 
 
 def _nearest_limb(gt: GroundTruth, t_ns: int, point_m: np.ndarray) -> tuple[int, float]:
@@ -101,6 +175,21 @@ def partings(gt: GroundTruth, run: RunData, radius_m: float) -> list[Parting]:
     return out
 
 
+def _route_at(
+    routes: dict[tuple[int, frozenset[int]], Route], t_ns: int, trackers: tuple[int, int]
+) -> Route | None:
+    """The route recorded for the pair ``trackers`` at the frame set nearest ``t_ns`` (within
+    1 ms: the listing's time is rounded)."""
+    pair = frozenset(trackers)
+    near = [(abs(t - t_ns), r) for (t, ids), r in routes.items() if ids == pair]
+    near = [(dt, r) for dt, r in near if dt <= 1_000_000]
+    return min(near, key=lambda x: x[0])[1] if near else None
+
+
+def _cell(x: float, digits: int) -> str:
+    return "-" if not np.isfinite(x) else f"{x:.{digits}f}"
+
+
 def _before_limb(gt: GroundTruth, run: RunData, tid: int, frame: int) -> int | None:
     """The true limb nearest tracker ``tid`` in its last frame set before ``frame`` outside a
     combined pair (None if it has none)."""
@@ -125,25 +214,41 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--radius", type=float, default=0.12, help="on a limb within this, m")
     parser.add_argument("--list", action="store_true", help="print every parting")
+    parser.add_argument(
+        "--routes", action="store_true", help="run again and list how each pair parted"
+    )
     args = parser.parse_args(argv)
     seeds = args.seeds or [args.seed]
+    args.rerun = args.rerun or args.routes
     rows, listing = [], []
     totals: Counter = Counter()
     for name in scene_names(args):
         counts: Counter = Counter()
         for seed in seeds:
             args.seed = seed
-            mcap = run_of(name, args)
+            with RouteSpy() as spy:
+                mcap = run_of(name, args)
             gt = load_ground_truth(args.out / name)
-            for p in partings(gt, read_run(mcap), args.radius):
+            run = read_run(mcap)
+            for p in partings(gt, run, args.radius):
                 counts[p.verdict] += 1
                 (a, da), (b, db) = p.modes
                 ta, tb = p.trackers
-                listing.append(
+                line = (
                     f"| {name} | {seed} | {p.t_s:.2f} | t{ta} / t{tb} "
                     f"| {gt.labels[a]} {1000 * da:.0f} | {gt.labels[b]} {1000 * db:.0f} "
                     f"| {p.verdict} |"
                 )
+                if args.routes:
+                    t_ns = int(run.frame_t_ns[0]) + round(p.t_s * 1e9)
+                    r = _route_at(spy.routes, t_ns, p.trackers)
+                    line += (
+                        " - | - | - | - |"
+                        if r is None
+                        else f" {r.route} | {_cell(r.first_m, 3)} | {_cell(r.far_prior, 2)} "
+                        f"| {r.far_views if r.far_views >= 0 else '-'} |"
+                    )
+                listing.append(line)
         totals.update(counts)
         n = sum(counts.values())
         rows.append(f"| {name} | {n} | " + " | ".join(str(counts[v]) for v in VERDICTS) + " |")
@@ -153,7 +258,10 @@ def main(argv: list[str] | None = None) -> int:
         VERDICTS,
         rows,
         totals,
-        "scenario | seed | t s | trackers | mode 1: limb mm | mode 2: limb mm | verdict"
+        (
+            "scenario | seed | t s | trackers | mode 1: limb mm | mode 2: limb mm | verdict"
+            + (" | route | first apart m | far prior | far views" if args.routes else "")
+        )
         if args.list
         else None,
         listing,
