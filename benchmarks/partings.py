@@ -25,8 +25,8 @@ the tracker's separation, and the listing also says how each pair parted (``mode
 modes moved ``separate_gain_m`` apart; ``far apart``: they stayed ``separate_far_m`` apart;
 ``seeds``: it parted onto seeds, ``fixed`` when the parting gave each tracker its mode;
 ``never met``), how far apart its modes first appeared (m) and the prior and supporting views
-of the far mode's candidate then (modes routes only): the figures of docs/benchmarks.md,
-session 99.
+of the far mode's candidate then (where the modes were measured, not set by a parting onto
+seeds): the figures of docs/benchmarks.md, session 99.
 """
 
 from __future__ import annotations
@@ -35,6 +35,7 @@ import argparse
 import itertools
 import sys
 from collections import Counter, defaultdict
+from contextlib import nullcontext
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -105,12 +106,13 @@ class RouteSpy:
                     route = "modes"
                 else:
                     route = "far apart"
+                # a parting onto seeds sets the modes itself (infinite gain): nothing of them
+                # was measured as they appeared
+                measured = bool(np.isfinite(a.split_gain_m))
                 prior, views = (
-                    spy._first.get((id(trk), a.id), (np.nan, -1))
-                    if route in ("modes", "far apart")
-                    else (np.nan, -1)
+                    spy._first.get((id(trk), a.id), (np.nan, -1)) if measured else (np.nan, -1)
                 )
-                first = float(a.split_first_m) if route != "seeds" else np.nan
+                first = float(a.split_first_m) if measured else np.nan
                 spy.routes[(int(t_ns), frozenset((a.id, b.id)))] = Route(
                     route, first, prior, views
                 )
@@ -226,7 +228,7 @@ def main(argv: list[str] | None = None) -> int:
         counts: Counter = Counter()
         for seed in seeds:
             args.seed = seed
-            with RouteSpy() as spy:
+            with RouteSpy() if args.routes else nullcontext() as spy:
                 mcap = run_of(name, args)
             gt = load_ground_truth(args.out / name)
             run = read_run(mcap)
