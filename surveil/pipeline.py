@@ -350,6 +350,7 @@ class Pipeline:
             self.rig,
             self.cfg.candidates,
             expected_m=self.tracker.expected_hands(fs.t_ns),
+            expected_alone=self.tracker.expected_alone(),
             crowns_m=(
                 self.tracker.expected_crowns(fs.t_ns)
                 if self.cfg.candidates.tops_from_heads

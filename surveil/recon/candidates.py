@@ -377,11 +377,12 @@ def rescue_expected(
     expected_m: np.ndarray,
     radius_m: float,
     pair_radius_m: float = np.inf,
+    alone: np.ndarray | None = None,
 ) -> np.ndarray:
     """(K,) bool: ``keep`` plus, for every expected position that explaining away left with
     no candidate within ``radius_m`` and that has another expected position within
-    ``pair_radius_m``, the strongest still-dropped candidate within ``radius_m`` of it (two
-    targets expected side by side each get their own).
+    ``pair_radius_m`` (or is marked in ``alone``), the strongest still-dropped candidate
+    within ``radius_m`` of it (two targets expected side by side each get their own).
 
     Explaining away lets each blob explain one point, but two hands whose blobs merged in all
     views but one are two points sharing blobs: the second hand's candidate is dropped as a
@@ -400,6 +401,8 @@ def rescue_expected(
     radius_m : float
     pair_radius_m : float -- only expected positions this close to another are helped
         (inf: all)
+    alone : (E,) bool or None -- expected positions helped without a neighbour (the
+        tracker's hands that had a candidate of their own in the previous frame set)
 
     Examples
     --------
@@ -416,6 +419,8 @@ def rescue_expected(
     apart = np.linalg.norm(expected_m[:, None] - expected_m[None], axis=2)
     np.fill_diagonal(apart, np.inf)
     paired = (apart.min(axis=1) < pair_radius_m) | np.isinf(pair_radius_m)
+    if alone is not None:
+        paired |= alone
     for e in np.flatnonzero(~(near & keep[:, None]).any(axis=0) & paired):
         dropped = np.flatnonzero(near[:, e] & ~keep)
         if len(dropped):
@@ -430,6 +435,7 @@ def make_candidates(
     *,
     expected_m: np.ndarray | None = None,
     crowns_m: np.ndarray | None = None,
+    expected_alone: np.ndarray | None = None,
 ) -> CandidateSet:
     """3-D candidate points of one frame set with their priors p(Z): the skin blobs' pairs
     (paper 004) and, with ``cfg.crowns.enabled``, the silhouettes' crowns where a head has no
@@ -451,6 +457,9 @@ def make_candidates(
         would otherwise have none (:func:`rescue_expected`, ``cfg.expected_radius_m``), and
         a candidate within ``cfg.expected_gate_m`` of one needs only
         ``cfg.expected_prior_threshold`` on its product.
+    expected_alone : (E,) bool or None
+        Which of ``expected_m`` may be spared a candidate with no other target expected
+        beside them (``rescue_expected``'s ``alone``; None: none).
     crowns_m : (H, 3) float or None
         The tracked heads' crowns (tops), m (the tracker's feedback): with
         ``cfg.tops_from_heads``, the top of a silhouette holding two or more of them is, for
@@ -493,7 +502,7 @@ def make_candidates(
         if m in by_cam:
             raise ValueError(f"observations[{i}]: camera {obs.camera!r} appears twice")
         by_cam[m] = obs
-    skin = _skin_candidates(by_cam, rig, cfg, expected_m, crowns_m)
+    skin = _skin_candidates(by_cam, rig, cfg, expected_m, crowns_m, expected_alone)
     if not cfg.crowns.enabled:
         return skin
     return with_crowns(skin, by_cam, rig, cfg.crowns)
@@ -545,6 +554,7 @@ def _skin_candidates(
     cfg: CandidateConfig,
     expected_m: np.ndarray | None,
     crowns_m: np.ndarray | None,
+    expected_alone: np.ndarray | None = None,
 ) -> CandidateSet:
     """:func:`make_candidates`' blob pairs (paper 004)."""
     # one back-projection per camera for all its blobs
@@ -679,7 +689,13 @@ def _skin_candidates(
         explained = real
         if expected_m is not None:
             real = rescue_expected(
-                points, prior, real, expected_m, cfg.expected_radius_m, cfg.rescue_pair_m
+                points,
+                prior,
+                real,
+                expected_m,
+                cfg.expected_radius_m,
+                cfg.rescue_pair_m,
+                expected_alone,
             )
         rescued = (real & ~explained)[real]
         views = (support[real] >= 0).sum(axis=1)

@@ -150,6 +150,8 @@ class _Track:
     speed_ema_mps: float = 0.0
     support_ema: float = 0.0  # smoothed likelihood level (a ghost's is lower: fewer views)
     rescued_frames: int = 0  # consecutive frame sets its nearest candidate was a rescued one
+    # frame sets since its nearest candidate was one of its own (kept, not rescued)
+    since_own_support: int = 1 << 30
     contest_ns: int | None = None  # since when it out-supports a hand holding a slot
     third_hand_ns: int | None = None  # since when it is a third hand beside an own-hands pair
     home_hand_ns: int | None = None  # since when it is an owner's hand gone home from a pair
@@ -359,19 +361,25 @@ class MultiTargetTracker:
         return self._frame(t_ns, transitions)
 
     def _count_rescued(self, pts: np.ndarray, rescued: np.ndarray | None) -> None:
-        """Update every active tracker's ``rescued_frames``: one more if the candidate
+        """Update every active tracker's ``rescued_frames`` (one more if the candidate
         nearest its estimate, within ``explained_radius_m``, was kept only because a target
-        was expected there (``CandidateSet.rescued``), else back to 0."""
+        was expected there, ``CandidateSet.rescued``, else back to 0) and
+        ``since_own_support`` (0 if that candidate was kept on its own, else one more)."""
         act = [tr for tr in self._tracks.values() if tr.phase in ACTIVE]
-        if rescued is None or not len(pts) or not act:
+        if not act:
+            return
+        if not len(pts):
             for tr in act:
                 tr.rescued_frames = 0
+                tr.since_own_support += 1
             return
         d = np.linalg.norm(np.array([tr.mean_m for tr in act])[:, None] - pts[None], axis=2)
         nearest = d.argmin(axis=1)
         near = d[np.arange(len(act)), nearest] <= self.cfg.lifecycle.explained_radius_m
         for tr, k, ok in zip(act, nearest, near, strict=True):
-            tr.rescued_frames = tr.rescued_frames + 1 if ok and rescued[k] else 0
+            was_rescued = bool(ok and rescued is not None and rescued[k])
+            tr.rescued_frames = tr.rescued_frames + 1 if was_rescued else 0
+            tr.since_own_support = 0 if ok and not was_rescued else tr.since_own_support + 1
 
     def _step_s(self, t_ns: int) -> float:
         """Time step from the previous frame set to ``t_ns``, at most ``max_dt_s`` (0 first)."""
@@ -2762,6 +2770,17 @@ class MultiTargetTracker:
         dt_s = max(self._step_s(int(t_ns)), 0.0)
         return tuple(self._snapshot(tid, tr, dt_s) for tid, tr in sorted(self._tracks.items()))
 
+    def _expected_hand_tracks(self) -> list[_Track]:
+        """The trackers :meth:`expected_hands` reports, in its order."""
+        limit = self.cfg.lifecycle.rescue_max_frames
+        return [
+            tr
+            for tr in self._tracks.values()
+            if tr.phase in ACTIVE
+            and tr.is_hand is not False
+            and not (limit and tr.phase is Phase.COMBINED and tr.rescued_frames >= limit)
+        ]
+
     def expected_hands(self, t_ns: int) -> np.ndarray:
         """(E, 3) where the active trackers not typed as heads are predicted to be at time
         ``t_ns`` (constant velocity from their estimates), m: the candidate stage's feedback
@@ -2769,15 +2788,25 @@ class MultiTargetTracker:
         nearest candidate was a rescued one for ``rescue_max_frames`` frame sets in a row
         (hands approaching each other, whose blobs merge, are what rescuing is for)."""
         dt_s = max(self._step_s(int(t_ns)), 0.0)
-        limit = self.cfg.lifecycle.rescue_max_frames
-        out = [
-            tr.mean_m + tr.vel_mps * dt_s
-            for tr in self._tracks.values()
-            if tr.phase in ACTIVE
-            and tr.is_hand is not False
-            and not (limit and tr.phase is Phase.COMBINED and tr.rescued_frames >= limit)
-        ]
+        out = [tr.mean_m + tr.vel_mps * dt_s for tr in self._expected_hand_tracks()]
         return np.array(out).reshape(-1, 3)
+
+    def expected_alone(self) -> np.ndarray:
+        """(E,) bool, in :meth:`expected_hands`' order: the labelled hands in the normal
+        state whose nearest candidate was one of their own at most
+        ``lone_rescue_frames`` frame sets ago; the candidate stage spares them a candidate
+        with no other hand beside them (``recon.rescue_expected``'s ``alone``)."""
+        frames = self.cfg.lifecycle.lone_rescue_frames
+        return np.array(
+            [
+                bool(frames)
+                and tr.phase is Phase.NORMAL
+                and tr.limb.is_hand
+                and tr.since_own_support < frames
+                for tr in self._expected_hand_tracks()
+            ],
+            dtype=bool,
+        )
 
     def expected_crowns(self, t_ns: int) -> np.ndarray:
         """(H, 3) where the crowns (tops) of the active trackers labelled heads are predicted

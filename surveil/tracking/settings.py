@@ -124,6 +124,15 @@ class LifecycleConfig:
         "(0 = no limit)",
         min=0,
     )
+    lone_rescue_frames: int = setting(
+        0,
+        "a labelled hand in the normal state is spared a candidate by explaining away "
+        "(recon.rescue_expected) with no other hand beside it, for this many frame sets "
+        "after its nearest candidate was last one of its own: a ghost that claimed its blob "
+        "would otherwise take its candidate for a frame; one left on a ghost gets none "
+        "(0 = off)",
+        min=0,
+    )
     combine_distance_m: float = setting(
         0.10, "two trackers whose estimates come closer than this combine, m", min=0.0
     )

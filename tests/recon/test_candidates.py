@@ -240,6 +240,12 @@ def test_rescue_gives_each_expected_position_its_own_strongest_dropped_candidate
     out = rescue_expected(pts, prior, keep, np.array([[0.1, 0, 1], [0.6, 0, 1]]), 0.05, 0.3)
     assert out.tolist() == keep.tolist()
     assert keep.tolist() == [False, False, False, True]  # the input is not modified
+    # ... unless that one is marked as helped alone (a hand with a candidate of its own
+    # in the previous frame set); the far one, unmarked, still is not
+    alone = rescue_expected(
+        pts, prior, keep, np.array([[0.1, 0, 1], [0.6, 0, 1]]), 0.05, 0.3, np.array([True, False])
+    )
+    assert alone.tolist() == [False, False, True, True]
     one = rescue_expected(pts, prior, keep, np.array([[0.1, 0, 1]]), 0.05)
     assert one.tolist() == [False, False, True, True]
     assert rescue_expected(pts, prior, keep, np.zeros((0, 3)), 0.05).tolist() == keep.tolist()

@@ -468,6 +468,37 @@ def test_a_pair_held_only_by_rescued_candidates_is_no_longer_expected(rig, rng, 
     assert len(lone.expected_hands(13 * DT_NS)) == 1
 
 
+def test_a_lone_hand_is_helped_alone_only_just_after_a_candidate_of_its_own(rig, rng):
+    """With lone_rescue_frames = 1 a labelled hand in the normal state may be spared a
+    candidate with no other hand beside it in the frame set right after its nearest
+    candidate was one of its own; after a rescued one (a tracker left on a ghost that only
+    rescuing keeps) or none it is not, and with 0 (off) never. Heads never are."""
+    frames, _, p = clap_frames(cross=False)
+    start = 30  # both hands labelled and apart
+    for frames_on, expect in [(1, [True, False, False, True]), (0, [False] * 4)]:
+        cfg = TrackingConfig(
+            lifecycle=LifecycleConfig(retire_unclaimed_s=0.0, lone_rescue_frames=frames_on)
+        )
+        trk = MultiTargetTracker(cfg, rig, seed=1)
+        out = run(trk, frames[:start], rng)
+        hands = [s for s in out[-1].targets if s.phase is Phase.NORMAL and "hand" in s.label]
+        assert len(hands) == 2
+        assert trk.expected_alone().tolist() == [frames_on == 1] * 2
+        hand = frames[start - 1][1]
+        seen = []
+        for k, rescued in enumerate([False, True, None, False]):
+            points = [p["head"], hand] if rescued is not None else [p["head"]]
+            flags = [False, rescued] if rescued is not None else [False]
+            cands = CandidateSet(
+                np.array(points), np.full(len(points), 0.9), rescued=np.array(flags)
+            )
+            trk.step((start + k) * DT_NS, cands)
+            alone = trk.expected_alone()
+            near = np.linalg.norm(trk.expected_hands((start + k + 1) * DT_NS) - hand, axis=1)
+            seen.append(bool(alone[near.argmin()]))
+        assert seen == expect
+
+
 def test_predicted_targets_are_the_last_frame_moved_on_to_the_next_time(rig, rng):
     trk = MultiTargetTracker(LONE, rig, seed=1)
     truth = [np.array([1.0 + i / 15, 2.0, 1.0]) for i in range(31)]  # 1 m/s along x
