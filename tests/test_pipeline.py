@@ -12,7 +12,7 @@ from surveil.activity import load_rules
 from surveil.blobs.extract import SceneryMask
 from surveil.blobs.settings import BlobConfig
 from surveil.blobs.skin import SkinModel
-from surveil.datatypes import Limb, Silhouettes
+from surveil.datatypes import Limb, Phase, Silhouettes
 from surveil.errors import ConfigError
 from surveil.eval.score import EvalConfig, evaluate
 from surveil.io.mcap_reader import read_run
@@ -308,36 +308,30 @@ def test_a_view_where_people_merged_keeps_blobs_for_as_many_as_the_crowns_count(
     assert all(set(s) == {"background", "skin", "crowns", "blobs"} for s in seconds.values())
 
 
-def test_hands_pulled_onto_their_blobs_lie_nearer_the_true_hands(small_recording, tmp_path):
-    """``[tracking] blob_pull_sigma_px``: the reported hands move towards the true hands; the
-    trackers (ids, labels, phases) and the heads stay the filter's."""
+def test_hands_pulled_onto_their_blobs_move_only_the_reported_hands(small_recording):
+    """``[tracking] blob_pull_sigma_px``: the reported points of labelled hands move (onto
+    their blobs' lines of sight, tests/tracking/test_blob_pull.py); the trackers (ids,
+    labels, phases) and the heads stay the filter's. Whether the moves bring the hands
+    nearer the true ones is measured on the bundled 640x480 takes, where 67 % of the demo's
+    do (docs/tracking.md, "Hands pulled onto their blobs"): this 3 s, 320x240 take has too
+    few moves (about 70) to tell, and its mean hand error went either way with changes
+    elsewhere in the pipeline (docs/benchmarks.md, session 100)."""
     rec = open_recording(small_recording)
     off = TrackingConfig(blob_pull_sigma_px=0.0)
     on = TrackingConfig(blob_pull_sigma_px=4.0, blob_pull_gate_px=12.0)  # 320x240: half size
-    moved = 0
     pipes = {
         k: Pipeline(PipelineConfig(tracking=c), rec.rig, load_rules())
         for k, c in (("off", off), ("on", on))
     }
-    sinks = {
-        k: McapSink(McapWriter(tmp_path / f"{k}.mcap", rec.rig, start_time_ns=rec.start_time_ns))
-        for k in pipes
-    }
+    moved = 0
     for fs in rec.framesets():
         a, b = (pipes[k].step(fs) for k in ("off", "on"))
-        sinks["off"].write(a)
-        sinks["on"].write(b)
         assert [(t.target_id, t.label, t.phase) for t in a.track.targets] == [
             (t.target_id, t.label, t.phase) for t in b.track.targets
         ]
         for s, p in zip(a.track.targets, b.track.targets, strict=True):
-            if s.limb is Limb.HEAD:
+            if s.limb is Limb.HEAD or s.phase is not Phase.NORMAL:
                 np.testing.assert_array_equal(s.mean_m, p.mean_m)
-            moved += not np.array_equal(s.mean_m, p.mean_m)
-    for sink in sinks.values():
-        sink.close()
-    assert moved > 0
-    runs = {
-        k: evaluate(small_recording, tmp_path / f"{k}.mcap", EvalConfig()).targets for k in pipes
-    }
-    assert runs["on"].hand_error_mm_mean < runs["off"].hand_error_mm_mean
+            else:
+                moved += not np.array_equal(s.mean_m, p.mean_m)
+    assert moved > 20

@@ -125,12 +125,13 @@ class LifecycleConfig:
         min=0,
     )
     lone_rescue_frames: int = setting(
-        0,
+        1,
         "a labelled hand in the normal state is spared a candidate by explaining away "
         "(recon.rescue_expected) with no other hand beside it, for this many frame sets "
         "after its nearest candidate was last one of its own: a ghost that claimed its blob "
-        "would otherwise take its candidate for a frame; one left on a ghost gets none "
-        "(0 = off)",
+        "would otherwise take its candidate for a frame; a tracker left on a ghost, which "
+        "only rescuing keeps, gets none. 2 cost held-out events (docs/candidates.md; "
+        "0 = off)",
         min=0,
     )
     combine_distance_m: float = setting(
