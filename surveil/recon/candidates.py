@@ -378,6 +378,7 @@ def rescue_expected(
     radius_m: float,
     pair_radius_m: float = np.inf,
     alone: np.ndarray | None = None,
+    alone_radius_m: float | None = None,
 ) -> np.ndarray:
     """(K,) bool: ``keep`` plus, for every expected position that explaining away left with
     no candidate within ``radius_m`` and that has another expected position within
@@ -403,6 +404,8 @@ def rescue_expected(
         (inf: all)
     alone : (E,) bool or None -- expected positions helped without a neighbour (the
         tracker's hands that had a candidate of their own in the previous frame set)
+    alone_radius_m : float or None -- the radius for those helped only because of
+        ``alone`` (None: ``radius_m``)
 
     Examples
     --------
@@ -415,12 +418,17 @@ def rescue_expected(
     keep = keep.copy()
     if len(expected_m) == 0 or len(points_m) == 0 or radius_m <= 0:
         return keep
-    near = np.linalg.norm(points_m[:, None] - expected_m[None], axis=2) < radius_m  # (K, E)
+    dist = np.linalg.norm(points_m[:, None] - expected_m[None], axis=2)  # (K, E)
     apart = np.linalg.norm(expected_m[:, None] - expected_m[None], axis=2)
     np.fill_diagonal(apart, np.inf)
     paired = (apart.min(axis=1) < pair_radius_m) | np.isinf(pair_radius_m)
+    radius = np.full(len(expected_m), radius_m)
     if alone is not None:
+        only_alone = alone & ~paired
+        if alone_radius_m is not None:
+            radius[only_alone] = alone_radius_m
         paired |= alone
+    near = dist < radius
     for e in np.flatnonzero(~(near & keep[:, None]).any(axis=0) & paired):
         dropped = np.flatnonzero(near[:, e] & ~keep)
         if len(dropped):
@@ -696,6 +704,7 @@ def _skin_candidates(
                 cfg.expected_radius_m,
                 cfg.rescue_pair_m,
                 expected_alone,
+                cfg.rescue_alone_radius_m,
             )
         rescued = (real & ~explained)[real]
         views = (support[real] >= 0).sum(axis=1)

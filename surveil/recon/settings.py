@@ -182,6 +182,12 @@ class CandidateConfig:
         "lone tracker on a ghost would rescue it forever), m",
         min=0.0,
     )
+    rescue_alone_radius_m: float = setting(
+        0.2,
+        "... and for a lone hand the tracker marks (tracking.lifecycle.lone_rescue_frames), "
+        "the strongest candidate within this instead of expected_radius_m, m",
+        min=0.0,
+    )
     expected_prior_threshold: float = setting(
         0.1,
         "the product threshold for a candidate within expected_gate_m of a tracked hand's "

@@ -246,6 +246,12 @@ def test_rescue_gives_each_expected_position_its_own_strongest_dropped_candidate
         pts, prior, keep, np.array([[0.1, 0, 1], [0.6, 0, 1]]), 0.05, 0.3, np.array([True, False])
     )
     assert alone.tolist() == [False, False, True, True]
+    # ... within its own radius: 1 cm takes the candidate at 0.1 m, not the stronger one
+    # 2 cm away
+    alone_near = rescue_expected(
+        pts, prior, keep, np.array([[0.1, 0, 1]]), 0.05, 0.3, np.array([True]), 0.01
+    )
+    assert alone_near.tolist() == [False, True, False, True]
     one = rescue_expected(pts, prior, keep, np.array([[0.1, 0, 1]]), 0.05)
     assert one.tolist() == [False, False, True, True]
     assert rescue_expected(pts, prior, keep, np.zeros((0, 3)), 0.05).tolist() == keep.tolist()
