@@ -435,6 +435,10 @@ class BlobSet:
         a blob's size and ``BlobConfig.open_keeps_isolated`` kept whole (a hand seen edge-on,
         or a fringe of colour along a fold); None when no blob was restored or the setting is
         off
+    hand_px : (B, 2) float64 or None -- where the pull of reported hand points
+        (:mod:`surveil.tracking.blob_pull`) takes each blob's hand to be: the hand end of a
+        blob taken for a bare forearm, the centroid of any other; None when the blob stage
+        does not keep them apart (``BlobConfig.arm_hand_end`` 'report' only): the centroid
     """
 
     centroids_px: np.ndarray
@@ -445,6 +449,7 @@ class BlobSet:
     labels: np.ndarray
     foreground_share: np.ndarray | None = None
     restored: np.ndarray | None = None
+    hand_px: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = len(self.centroids_px)
@@ -468,6 +473,9 @@ class BlobSet:
         if self.restored is not None:
             require_shape("restored", self.restored, (n,), np.bool_)
             readonly(self.restored)
+        if self.hand_px is not None:
+            require_shape("hand_px", self.hand_px, (n, 2), np.floating)
+            readonly(self.hand_px)
 
     def __len__(self) -> int:
         return len(self.centroids_px)

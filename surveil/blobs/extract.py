@@ -560,6 +560,7 @@ def extract_blobs(
         labels,
         crop.foreground_share,
         crop.restored,
+        None if crop.hand_px is None else crop.hand_px + shift,
     )
 
 
@@ -713,6 +714,7 @@ def _extract(
     else:  # voted already, over every component
         sil_of = sil_of_all[comp]
     cents = centroids[comp].astype(np.float64)
+    hand_px = None
     if cfg.arm_length_rel > 0 and silhouettes.centres_px is not None:
         top = np.asarray(silhouettes.top_v_px)[sil_of - 1]
         bottom = np.asarray(silhouettes.bottom_v_px)[sil_of - 1]
@@ -721,7 +723,7 @@ def _extract(
         shoulders = np.column_stack(
             [silhouettes.centres_px[sil_of - 1, 0], top + SHOULDER_DROP_REL * heights]
         )
-        cents = hand_ends(
+        ends = hand_ends(
             np.column_stack([xs, ys]).astype(np.float64),
             remap[labels[ys, xs]],
             cents,
@@ -733,6 +735,12 @@ def _extract(
             cfg.hand_length_rel,
             cfg.arm_zone,
         )
+        if cfg.arm_hand_end == "report":
+            # the tracker's inputs stay the centres of mass its rules were tuned to; the
+            # hand ends only move the hands it reports (docs/blobs.md, "Bare forearms")
+            hand_px = ends
+        else:
+            cents = ends
     rel_v = _relative_v(cents[:, 1], sil_of, silhouettes)
     out_labels = np.zeros(n_all, np.int32)
     out_labels[comp] = np.arange(1, len(comp) + 1, dtype=np.int32)
@@ -745,6 +753,7 @@ def _extract(
         np.take(out_labels, labels),
         None if shares is None else shares[comp],
         None if restored_comp is None else restored_comp[comp],
+        hand_px,
     )
 
 

@@ -288,6 +288,14 @@ class BlobConfig:
         "0.1, lies beside the head (a face or an ear with its neck, seen from the side or "
         "behind, is too); false = anywhere in the silhouette, as before session 89",
     )
+    arm_hand_end: str = setting(
+        "point",
+        "where a bare forearm's hand end goes (with arm_length_rel > 0): 'point' = it is the "
+        "blob's point (centroids_px, rel_v: candidates and the tracker see it); 'report' = "
+        "the blob keeps its centre of mass and the hand end only pulls the tracker's reported "
+        "hand points (BlobSet.hand_px, tracking.blob_pull_*; docs/blobs.md, 'Bare forearms')",
+        choices=("point", "report"),
+    )
     hand_length_rel: float = setting(
         0.11,
         "... the hand end: the centre of mass of the blob's last this much (times the "

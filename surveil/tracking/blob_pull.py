@@ -34,18 +34,25 @@ def blob_evidence(
     rig: Rig,
     sigma_px: float,
     gate_px: float,
+    hand_end_sigma_px: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The lines of sight of the blobs at each pulled point's projection, as quadratic terms.
 
     A view contributes to point i when the blob centroid nearest i's projection lies within
     ``gate_px`` of it and i's projection is, of all ``points_m``, the nearest to that blob
-    (mutual nearest: a blob between two targets, a hand at the face, serves neither).
+    (mutual nearest: a blob between two targets, a hand at the face, serves neither). The
+    line of sight goes through the blob's centroid, or, given ``hand_end_sigma_px``, through
+    its ``BlobSet.hand_px`` where the blob stage kept them: a bare forearm is matched by its
+    centroid, which the tracker follows, and its hand end's line, with that error in
+    pixels, pulls towards the hand.
 
     Parameters
     ----------
     points_m : (A, 3) float -- every active target's point (heads too: they claim their blobs)
     pulled : (A,) bool -- the points to collect evidence for
     sigma_px : the blob centroid's error in pixels; at depth z it is sigma_px * z / f metres
+    hand_end_sigma_px : the error of a hand end away from its blob's centroid, pixels; None:
+        every line goes through the centroid
 
     Returns
     -------
@@ -76,8 +83,15 @@ def blob_evidence(
         if not ok.any():
             continue
         idx = np.flatnonzero(ok)
-        origin, dirs = cam.backproject(obs.blobs.centroids_px[best[idx]])
-        sigma_m = sigma_px * depth[idx] / cam.K[0, 0]
+        through = obs.blobs.centroids_px[best[idx]]
+        sigma = np.full(len(idx), float(sigma_px))
+        if hand_end_sigma_px is not None and obs.blobs.hand_px is not None:
+            ends = obs.blobs.hand_px[best[idx]]
+            moved = (ends != through).any(axis=1)
+            through = np.where(moved[:, None], ends, through)
+            sigma[moved] = hand_end_sigma_px
+        origin, dirs = cam.backproject(through)
+        sigma_m = sigma * depth[idx] / cam.K[0, 0]
         proj = np.eye(3)[None] - dirs[:, :, None] * dirs[:, None, :]
         w = 1.0 / sigma_m**2
         info[idx] += proj * w[:, None, None]
@@ -93,10 +107,12 @@ def pull_hands_onto_blobs(
     sigma_px: float,
     gate_px: float,
     prior_floor_m: float,
+    hand_end_sigma_px: float | None = None,
 ) -> tuple[TargetSnapshot, ...]:
     """``targets`` with each labelled hand in the normal phase moved to the most probable
     point given its estimate (prior: ``cov_m2`` + ``prior_floor_m``^2 I) and the blobs at its
-    projection (:func:`blob_evidence`). Other targets, and hands no blob shows, unchanged."""
+    projection (:func:`blob_evidence`; given ``hand_end_sigma_px``, a bare forearm's line
+    goes through its hand end). Other targets, and hands no blob shows, unchanged."""
     active = [i for i, t in enumerate(targets) if t.phase is not Phase.LOST]
     if not active:
         return targets
@@ -104,7 +120,9 @@ def pull_hands_onto_blobs(
     pulled = np.array(
         [targets[i].limb.is_hand and targets[i].phase is Phase.NORMAL for i in active]
     )
-    info, rhs, n_views = blob_evidence(pts, pulled, observations, rig, sigma_px, gate_px)
+    info, rhs, n_views = blob_evidence(
+        pts, pulled, observations, rig, sigma_px, gate_px, hand_end_sigma_px
+    )
     out = list(targets)
     for k in np.flatnonzero(n_views):
         t = targets[active[k]]

@@ -706,6 +706,14 @@ class TrackingConfig:
         "a blob pulls a hand when its centroid lies this close to the hand's projection, px",
         min=0.0,
     )
+    blob_pull_hand_end_sigma_px: float = setting(
+        1.0,
+        "... a bare forearm's line goes through its hand end, with this error: the tracker "
+        "follows the forearm's centre of mass, ~15 cm from the hand, and the hand end must "
+        "outweigh that estimate (only with blobs.arm_hand_end = 'report'; docs/tracking.md, "
+        "'Hands pulled onto their blobs'), px",
+        min=0.01,
+    )
     blob_pull_floor_m: float = setting(
         0.05,
         "added to the spread of the filter's particles (a standard deviation) in the prior of "

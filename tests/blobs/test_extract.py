@@ -222,6 +222,28 @@ def test_a_bare_forearm_stands_for_its_hand_end_and_a_face_for_its_centre():
     assert point == pytest.approx([72.0, 16.0])
 
 
+def test_hand_ends_for_the_report_only_leave_the_blobs_points_as_they_were():
+    """``arm_hand_end = 'report'``: every blob keeps its centre of mass and rel_v (the
+    candidates and the tracker see what they see with the option off); the hand ends the
+    option would have made the points are in ``hand_px`` instead, and the default mode
+    keeps none there."""
+    sil = _one_person()
+    skin = np.zeros((H, W), bool)
+    skin[50:74, 70:75] = True  # hanging bare forearm
+    skin[12:34, 40:50] = True  # face and neck
+    skin[50:60, 25:29] = True  # hand alone
+    cfg = dataclasses.replace(BARE_ARMS, hand_length_rel=0.1)
+    as_points = extract_blobs(skin, sil, cfg)
+    report = extract_blobs(skin, sil, dataclasses.replace(cfg, arm_hand_end="report"))
+    off = extract_blobs(skin, sil, dataclasses.replace(cfg, arm_length_rel=0.0))
+    assert as_points.hand_px is None and off.hand_px is None
+    np.testing.assert_array_equal(report.centroids_px, off.centroids_px)
+    np.testing.assert_array_equal(report.rel_v, off.rel_v)
+    np.testing.assert_array_equal(report.hand_px, as_points.centroids_px)
+    assert report.hand_px[1] == pytest.approx([72.0, 69.0])  # the arm's; the others unmoved
+    np.testing.assert_array_equal(report.hand_px[[0, 2]], off.centroids_px[[0, 2]])
+
+
 def test_arm_zone_keeps_a_neck_and_a_shin_at_their_centres_and_still_moves_real_arms():
     """Seen from the side or behind, an ear or a face with its neck is a strip as long and
     thin as a forearm, and so is a shin in skin-coloured trousers; without ``arm_zone`` both

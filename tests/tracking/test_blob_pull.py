@@ -20,14 +20,21 @@ HAND = np.array([2.4, 1.9, 1.1])
 SIGMA_PX, GATE_PX, FLOOR_M = 2.0, 25.0, 0.05
 
 
-def observe(rig, blobs_m: dict[str, list[np.ndarray]]) -> dict[str, CameraObservation]:
-    """Observations whose only blobs sit at the projections of ``blobs_m[camera]``."""
+def observe(
+    rig, blobs_m: dict[str, list[np.ndarray]], hands_m: np.ndarray | None = None
+) -> dict[str, CameraObservation]:
+    """Observations whose only blobs sit at the projections of ``blobs_m[camera]``; with
+    ``hands_m`` every blob's ``hand_px`` is that point's projection (a bare forearm whose
+    hand end is there)."""
     out = {}
     for cam in rig.cameras:
         h, w = cam.height, cam.width
         pts = blobs_m.get(cam.name, [])
         px = cam.project(np.array(pts).reshape(-1, 3))[0]
         n = len(px)
+        hand_px = None
+        if hands_m is not None:
+            hand_px = np.repeat(cam.project(hands_m[None])[0], n, axis=0).astype(np.float64)
         blobs = BlobSet(
             px.astype(np.float64),
             np.full(n, 40, np.int64),
@@ -35,6 +42,7 @@ def observe(rig, blobs_m: dict[str, list[np.ndarray]]) -> dict[str, CameraObserv
             np.ones(n, np.int32),
             np.full(n, 0.5),
             np.zeros((h, w), np.int32),
+            hand_px=hand_px,
         )
         sil = Silhouettes(
             np.zeros((h, w), np.int32),
@@ -89,6 +97,33 @@ def test_two_views_move_the_point_onto_the_hand(rig):
     out = pull_hands_onto_blobs((target(1, estimate),), seen, rig, sharp_px, GATE_PX, FLOOR_M)
     assert np.linalg.norm(estimate - HAND) > 0.1
     assert np.linalg.norm(out[0].mean_m - HAND) < 0.01
+
+
+def test_a_bare_forearms_hand_end_pulls_the_reported_hand_its_centroid_the_tracker(rig):
+    """The blob stage's ``arm_hand_end = 'report'``: the tracker follows a bare forearm's
+    centre of mass; the reported hand is pulled along the lines through its hand end (given
+    their error), and a blob without hand ends, a pull not given that error and the
+    one-view points the tracker is fed keep the centroids."""
+    a, b = rig.cameras[0], rig.cameras[1]
+    forearm = HAND + np.array([0.0, 0.05, 0.12])  # its centre of mass, towards the elbow
+    end_px = 0.3
+    with_ends = observe(rig, {a.name: [forearm], b.name: [forearm]}, hands_m=HAND)
+    pull = (rig, SIGMA_PX, GATE_PX, FLOOR_M)
+    out = pull_hands_onto_blobs((target(1, forearm),), with_ends, *pull, end_px)
+    assert np.linalg.norm(out[0].mean_m - HAND) < 0.01
+    out = pull_hands_onto_blobs((target(1, forearm),), with_ends, *pull)
+    assert np.linalg.norm(out[0].mean_m - forearm) < 0.01
+    plain = observe(rig, {a.name: [forearm], b.name: [forearm]})
+    out = pull_hands_onto_blobs((target(1, forearm),), plain, *pull, end_px)
+    assert np.linalg.norm(out[0].mean_m - forearm) < 0.01
+    one_view = observe(rig, {a.name: [forearm]}, hands_m=HAND)
+    estimate = forearm + sideways(a, 0.05)
+    points, _ = one_view_hand_points(
+        (target(1, estimate),), np.zeros((0, 3)), one_view, *pull, 0.15
+    )
+    to_forearm = line_distance_m(a, points[0], forearm)
+    assert to_forearm < 0.5 * line_distance_m(a, estimate, forearm)
+    assert to_forearm < 0.5 * line_distance_m(a, points[0], HAND)
 
 
 def test_a_blob_nearer_another_target_pulls_nothing(rig):
