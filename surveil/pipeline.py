@@ -396,7 +396,7 @@ class Pipeline:
                     tcfg.blob_pull_sigma_px,
                     tcfg.blob_pull_gate_px,
                     tcfg.blob_pull_floor_m,
-                    tcfg.blob_pull_hand_end_sigma_px,
+                    (tcfg.blob_pull_hand_end_sigma_px, tcfg.blob_pull_lone_hand_end_sigma_px),
                 ),
             )
         t2 = time.perf_counter()

@@ -34,7 +34,7 @@ def blob_evidence(
     rig: Rig,
     sigma_px: float,
     gate_px: float,
-    hand_end_sigma_px: float | None = None,
+    hand_end_sigma_px: tuple[float, float] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The lines of sight of the blobs at each pulled point's projection, as quadratic terms.
 
@@ -43,16 +43,18 @@ def blob_evidence(
     (mutual nearest: a blob between two targets, a hand at the face, serves neither). The
     line of sight goes through the blob's centroid, or, given ``hand_end_sigma_px``, through
     its ``BlobSet.hand_px`` where the blob stage kept them: a bare forearm is matched by its
-    centroid, which the tracker follows, and its hand end's line, with that error in
-    pixels, pulls towards the hand.
+    centroid, which the tracker follows, and its hand end's line pulls towards the hand.
 
     Parameters
     ----------
     points_m : (A, 3) float -- every active target's point (heads too: they claim their blobs)
     pulled : (A,) bool -- the points to collect evidence for
     sigma_px : the blob centroid's error in pixels; at depth z it is sigma_px * z / f metres
-    hand_end_sigma_px : the error of a hand end away from its blob's centroid, pixels; None:
-        every line goes through the centroid
+    hand_end_sigma_px : (agreed, lone) -- the error of a hand end away from its blob's
+        centroid, pixels, where two or more of the point's views have one (their lines meet
+        at the hand) and where only one has (a blob taken for a forearm by mistake, two
+        hands joined, would pull the point far across its line); None: every line goes
+        through the centroid
 
     Returns
     -------
@@ -66,6 +68,8 @@ def blob_evidence(
     n_views = np.zeros(n, np.int64)
     if n == 0 or not pulled.any():
         return info, rhs, n_views
+    lines = []  # per view: (camera, points, pixels the lines go through, depths, hand end?)
+    n_ends = np.zeros(n, np.int64)
     for cam in rig:
         obs = observations.get(cam.name)
         if obs is None or len(obs.blobs) == 0:
@@ -84,14 +88,20 @@ def blob_evidence(
             continue
         idx = np.flatnonzero(ok)
         through = obs.blobs.centroids_px[best[idx]]
-        sigma = np.full(len(idx), float(sigma_px))
+        moved = np.zeros(len(idx), bool)
         if hand_end_sigma_px is not None and obs.blobs.hand_px is not None:
             ends = obs.blobs.hand_px[best[idx]]
             moved = (ends != through).any(axis=1)
             through = np.where(moved[:, None], ends, through)
-            sigma[moved] = hand_end_sigma_px
+            n_ends[idx[moved]] += 1
+        lines.append((cam, idx, through, depth[idx], moved))
+    for cam, idx, through, depth_m, moved in lines:
+        sigma = np.full(len(idx), float(sigma_px))
+        if hand_end_sigma_px is not None:
+            agreed, lone = hand_end_sigma_px
+            sigma[moved] = np.where(n_ends[idx[moved]] >= 2, agreed, lone)
         origin, dirs = cam.backproject(through)
-        sigma_m = sigma * depth[idx] / cam.K[0, 0]
+        sigma_m = sigma * depth_m / cam.K[0, 0]
         proj = np.eye(3)[None] - dirs[:, :, None] * dirs[:, None, :]
         w = 1.0 / sigma_m**2
         info[idx] += proj * w[:, None, None]
@@ -107,12 +117,13 @@ def pull_hands_onto_blobs(
     sigma_px: float,
     gate_px: float,
     prior_floor_m: float,
-    hand_end_sigma_px: float | None = None,
+    hand_end_sigma_px: tuple[float, float] | None = None,
 ) -> tuple[TargetSnapshot, ...]:
     """``targets`` with each labelled hand in the normal phase moved to the most probable
     point given its estimate (prior: ``cov_m2`` + ``prior_floor_m``^2 I) and the blobs at its
-    projection (:func:`blob_evidence`; given ``hand_end_sigma_px``, a bare forearm's line
-    goes through its hand end). Other targets, and hands no blob shows, unchanged."""
+    projection (:func:`blob_evidence`; given ``hand_end_sigma_px``, (agreed, lone) pixels, a
+    bare forearm's line goes through its hand end). Other targets, and hands no blob shows,
+    unchanged."""
     active = [i for i, t in enumerate(targets) if t.phase is not Phase.LOST]
     if not active:
         return targets

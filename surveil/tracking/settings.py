@@ -708,10 +708,17 @@ class TrackingConfig:
     )
     blob_pull_hand_end_sigma_px: float = setting(
         1.0,
-        "... a bare forearm's line goes through its hand end, with this error: the tracker "
-        "follows the forearm's centre of mass, ~15 cm from the hand, and the hand end must "
-        "outweigh that estimate (only with blobs.arm_hand_end = 'report'; docs/tracking.md, "
-        "'Hands pulled onto their blobs'), px",
+        "... a bare forearm's line goes through its hand end, with this error where two or "
+        "more of the hand's views have one: the tracker follows the forearm's centre of "
+        "mass, ~15 cm from the hand, and the hand ends must outweigh that estimate (only "
+        "with blobs.arm_hand_end = 'report'; docs/tracking.md, 'Hands pulled onto their "
+        "blobs'), px",
+        min=0.01,
+    )
+    blob_pull_lone_hand_end_sigma_px: float = setting(
+        3.0,
+        "... and with this error where only one view has one (a blob taken for a forearm by "
+        "mistake, two hands joined, would pull the hand far across that view's line), px",
         min=0.01,
     )
     blob_pull_floor_m: float = setting(

@@ -21,11 +21,11 @@ SIGMA_PX, GATE_PX, FLOOR_M = 2.0, 25.0, 0.05
 
 
 def observe(
-    rig, blobs_m: dict[str, list[np.ndarray]], hands_m: np.ndarray | None = None
+    rig, blobs_m: dict[str, list[np.ndarray]], hands_m: np.ndarray | None = None, ends_in=None
 ) -> dict[str, CameraObservation]:
     """Observations whose only blobs sit at the projections of ``blobs_m[camera]``; with
-    ``hands_m`` every blob's ``hand_px`` is that point's projection (a bare forearm whose
-    hand end is there)."""
+    ``hands_m`` every blob's ``hand_px`` (in the cameras named in ``ends_in``, default all)
+    is that point's projection (a bare forearm whose hand end is there)."""
     out = {}
     for cam in rig.cameras:
         h, w = cam.height, cam.width
@@ -33,7 +33,7 @@ def observe(
         px = cam.project(np.array(pts).reshape(-1, 3))[0]
         n = len(px)
         hand_px = None
-        if hands_m is not None:
+        if hands_m is not None and (ends_in is None or cam.name in ends_in):
             hand_px = np.repeat(cam.project(hands_m[None])[0], n, axis=0).astype(np.float64)
         blobs = BlobSet(
             px.astype(np.float64),
@@ -106,13 +106,19 @@ def test_a_bare_forearms_hand_end_pulls_the_reported_hand_its_centroid_the_track
     one-view points the tracker is fed keep the centroids."""
     a, b = rig.cameras[0], rig.cameras[1]
     forearm = HAND + np.array([0.0, 0.05, 0.12])  # its centre of mass, towards the elbow
-    end_px = 0.3
+    end_px = (0.3, 0.3)
     with_ends = observe(rig, {a.name: [forearm], b.name: [forearm]}, hands_m=HAND)
     pull = (rig, SIGMA_PX, GATE_PX, FLOOR_M)
     out = pull_hands_onto_blobs((target(1, forearm),), with_ends, *pull, end_px)
     assert np.linalg.norm(out[0].mean_m - HAND) < 0.01
     out = pull_hands_onto_blobs((target(1, forearm),), with_ends, *pull)
     assert np.linalg.norm(out[0].mean_m - forearm) < 0.01
+    # one view's hand end alone pulls less: it may be a blob taken for a forearm by mistake
+    lone = observe(rig, {a.name: [forearm], b.name: [forearm]}, hands_m=HAND, ends_in={a.name})
+    sure = pull_hands_onto_blobs((target(1, forearm),), lone, *pull, (0.3, 0.3))[0].mean_m
+    wary = pull_hands_onto_blobs((target(1, forearm),), lone, *pull, (0.3, 3.0))[0].mean_m
+    assert line_distance_m(a, sure, HAND) < 0.005
+    assert line_distance_m(a, wary, HAND) > 3 * line_distance_m(a, sure, HAND)
     plain = observe(rig, {a.name: [forearm], b.name: [forearm]})
     out = pull_hands_onto_blobs((target(1, forearm),), plain, *pull, end_px)
     assert np.linalg.norm(out[0].mean_m - forearm) < 0.01
