@@ -4,8 +4,9 @@ forearms").
     python benchmarks/arm_moves.py [--config TOML] [--sheet PNG] [--by-limb] [NAME ...]
 
 Runs the front end (``benchmarks/front_end.py``, N_h the true number of people) with the given
-settings (default: the defaults with ``[blobs] arm_length_rel = 0.17``) and counts the blobs
-whose point :func:`surveil.blobs.extract.hand_ends` moves off their centre of mass, and
+settings (default: the defaults, ``[blobs] arm_length_rel = 0.17`` since session 101) and counts
+the blobs whose point :func:`surveil.blobs.extract.hand_ends` moves off their centre of mass
+(the blob's point or, with ``arm_hand_end = "report"``, its ``hand_px``), and
 judges each move against the ground truth: the true head or hand (visible in that camera,
 projected through the recording's rig) nearest to either point, within ``JUDGE_PX``, is the
 blob's limb; the move is *toward* it when the new point lies nearer to it than the centre
@@ -21,7 +22,6 @@ blob green) to look at what moved.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import sys
 from pathlib import Path
 
@@ -156,13 +156,11 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_scene_arguments(parser)
     parser.add_argument("--out", type=Path, default=ROOT / "out" / "bench_synth")
-    parser.add_argument("--config", type=Path, help="settings (default: the option on)")
+    parser.add_argument("--config", type=Path, help="settings (default: the defaults)")
     parser.add_argument("--sheet", type=Path, help="contact sheet PNG of the last scene's moves")
     parser.add_argument("--by-limb", action="store_true", help="also a row per true limb")
     args = parser.parse_args(argv)
     cfg = load_pipeline_config(args.config)
-    if args.config is None:
-        cfg = dataclasses.replace(cfg, blobs=dataclasses.replace(cfg.blobs, arm_length_rel=0.17))
     names = scene_names(args)
     print("| scenario | blobs | moved | share | toward | away | no limb | gain px |")
     print("|---|---|---|---|---|---|---|---|")

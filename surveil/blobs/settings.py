@@ -259,11 +259,11 @@ class BlobConfig:
     restore_max_rel_v: float = setting(0.7, "... and at most this", min=0.0, max=1.0)
 
     arm_length_rel: float = setting(
-        0.0,
+        0.17,
         "a blob longer than this times its silhouette's height is a bare forearm with its hand "
-        "(short sleeves: ~0.25 of a person's height, a hand alone ~0.11); its point is then "
-        "its hand end, not its centre of mass; 0.17 suits short sleeves (0 = always the "
-        "centre of mass, the default: docs/blobs.md, 'Bare forearms')",
+        "(short sleeves: ~0.25 of a person's height, a hand alone ~0.11), whose hand end is "
+        "found (arm_hand_end says what it is for; 0 = none: every blob is its centre of "
+        "mass; docs/blobs.md, 'Bare forearms')",
         min=0.0,
     )
     arm_max_length_rel: float = setting(
@@ -289,11 +289,12 @@ class BlobConfig:
         "behind, is too); false = anywhere in the silhouette, as before session 89",
     )
     arm_hand_end: str = setting(
-        "point",
-        "where a bare forearm's hand end goes (with arm_length_rel > 0): 'point' = it is the "
-        "blob's point (centroids_px, rel_v: candidates and the tracker see it); 'report' = "
-        "the blob keeps its centre of mass and the hand end only pulls the tracker's reported "
-        "hand points (BlobSet.hand_px, tracking.blob_pull_*; docs/blobs.md, 'Bare forearms')",
+        "report",
+        "where a bare forearm's hand end goes (with arm_length_rel > 0): 'report' (the "
+        "default) = the blob keeps its centre of mass and the hand end only pulls the "
+        "tracker's reported hand points (BlobSet.hand_px, tracking.blob_pull_*); 'point' = "
+        "it is the blob's point (centroids_px, rel_v: candidates and the tracker see it, "
+        "the option before session 101); docs/blobs.md, 'Bare forearms'",
         choices=("point", "report"),
     )
     hand_length_rel: float = setting(
