@@ -2,13 +2,14 @@
 cameras see the hand, by the tracker's phase, and by how near its nearest candidate was.
 
     python benchmarks/error_breakdown.py [--out out/bench_synth] [--seed N] [--config FILE]
-        [--rerun] [NAME ...]
+        [--rerun] [--by-limb] [NAME ...]
 
 Reads (or runs, as ``pipeline_bench.py`` does) each scene's output MCAP and matches it to
 the ground truth exactly as ``surveil eval`` does (``surveil.eval.score``). Each row: the
 matched hand-frames in that group, their share, mean and median 3-D error, mm, and the
 group's share of the summed error. Views are the ground truth's unoccluded views; the
 nearest candidate is the run's own ``/candidates`` of that frame set nearest the true hand.
+``--by-limb`` adds a row per true hand.
 """
 
 from __future__ import annotations
@@ -41,7 +42,9 @@ def nearest_candidate_mm(run, frame_rows: np.ndarray, truth_m: np.ndarray) -> np
     return out
 
 
-def groups(rec_dir: Path, mcap: Path) -> list[tuple[str, np.ndarray, np.ndarray]]:
+def groups(
+    rec_dir: Path, mcap: Path, by_limb: bool = False
+) -> list[tuple[str, np.ndarray, np.ndarray]]:
     gt, run = load_ground_truth(rec_dir), read_run(mcap)
     m = match_targets(gt, run, EvalConfig())
     hand = np.array(["hand" in gt.labels[j] for j in m.true_idx], dtype=bool)
@@ -62,18 +65,22 @@ def groups(rec_dir: Path, mcap: Path) -> list[tuple[str, np.ndarray, np.ndarray]
         ("candidate 50-100 mm", err, (cand > 50) & (cand <= 100)),
         ("candidate > 100 mm", err, cand > 100),
     ]
+    if by_limb:
+        limbs = np.array([gt.labels[j] for j in m.true_idx[hand]])
+        out += [(f"limb {label}", err, limbs == label) for label in sorted(set(limbs))]
     return out
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_run_arguments(parser)
+    parser.add_argument("--by-limb", action="store_true", help="also a row per true hand")
     args = parser.parse_args(argv)
     print("| scenario | hand-frames | n | share | mean mm | median mm | share of error |")
     print("|---|---|---|---|---|---|---|")
     for name in scene_names(args):
         rec_dir = render(name, args.out)
-        parts = groups(rec_dir, run_of(name, args))
+        parts = groups(rec_dir, run_of(name, args), args.by_limb)
         total = parts[0][1].sum()
         for what, err, sel in parts:
             if not sel.any():
