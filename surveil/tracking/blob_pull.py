@@ -24,7 +24,7 @@ import numpy as np
 from scipy.spatial.distance import cdist
 
 from surveil.camera import Rig
-from surveil.datatypes import CameraObservation, Phase, TargetSnapshot
+from surveil.datatypes import CameraObservation, Limb, Phase, TargetSnapshot
 
 
 def blob_evidence(
@@ -35,6 +35,7 @@ def blob_evidence(
     sigma_px: float,
     gate_px: float,
     hand_end_sigma_px: tuple[float, float] | None = None,
+    ends_only: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The lines of sight of the blobs at each pulled point's projection, as quadratic terms.
 
@@ -55,6 +56,8 @@ def blob_evidence(
         at the hand) and where only one has (a blob taken for a forearm by mistake, two
         hands joined, would pull the point far across its line); None: every line goes
         through the centroid
+    ends_only : (A,) bool, optional -- points that take evidence only when a hand end is
+        among their views (an unlabelled tracker: a bare forearm says it is at a hand)
 
     Returns
     -------
@@ -96,6 +99,11 @@ def blob_evidence(
             n_ends[idx[moved]] += 1
         lines.append((cam, idx, through, depth[idx], moved))
     for cam, idx, through, depth_m, moved in lines:
+        if ends_only is not None:
+            keep = ~ends_only[idx] | (n_ends[idx] > 0)
+            idx, through, depth_m, moved = idx[keep], through[keep], depth_m[keep], moved[keep]
+            if not len(idx):
+                continue
         sigma = np.full(len(idx), float(sigma_px))
         if hand_end_sigma_px is not None:
             agreed, lone = hand_end_sigma_px
@@ -121,18 +129,34 @@ def pull_hands_onto_blobs(
 ) -> tuple[TargetSnapshot, ...]:
     """``targets`` with each labelled hand in the normal phase moved to the most probable
     point given its estimate (prior: ``cov_m2`` + ``prior_floor_m``^2 I) and the blobs at its
-    projection (:func:`blob_evidence`; given ``hand_end_sigma_px``, (agreed, lone) pixels, a
-    bare forearm's line goes through its hand end). Other targets, and hands no blob shows,
-    unchanged."""
+    projection (:func:`blob_evidence`). Given ``hand_end_sigma_px``, (agreed, lone) pixels, a
+    bare forearm's line goes through its hand end, and an unlabelled tracker that is not a
+    head is pulled too where one of its views is such a forearm (its labels are pending, the
+    hand end says where a hand is). Other targets, and hands no blob shows, unchanged."""
     active = [i for i, t in enumerate(targets) if t.phase is not Phase.LOST]
     if not active:
         return targets
     pts = np.array([targets[i].mean_m for i in active])
-    pulled = np.array(
+    hands = np.array(
         [targets[i].limb.is_hand and targets[i].phase is Phase.NORMAL for i in active]
     )
+    unlabelled = np.array(
+        [
+            hand_end_sigma_px is not None
+            and targets[i].phase is Phase.UNLABELLED
+            and targets[i].limb is not Limb.HEAD
+            for i in active
+        ]
+    )
     info, rhs, n_views = blob_evidence(
-        pts, pulled, observations, rig, sigma_px, gate_px, hand_end_sigma_px
+        pts,
+        hands | unlabelled,
+        observations,
+        rig,
+        sigma_px,
+        gate_px,
+        hand_end_sigma_px,
+        unlabelled,
     )
     out = list(targets)
     for k in np.flatnonzero(n_views):

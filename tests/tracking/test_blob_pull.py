@@ -132,6 +132,24 @@ def test_a_bare_forearms_hand_end_pulls_the_reported_hand_its_centroid_the_track
     assert to_forearm < 0.5 * line_distance_m(a, points[0], HAND)
 
 
+@pytest.mark.parametrize("limb", [Limb.UNKNOWN, Limb.LEFT_HAND])
+def test_an_unlabelled_tracker_on_a_bare_forearm_is_pulled_to_its_hand_end(rig, limb):
+    """An unlabelled tracker (labels pending, not a head) is pulled where one of its views is
+    a bare forearm, through the hand end; on plain blobs, or as a head, it keeps the
+    filter's estimate."""
+    a, b = rig.cameras[0], rig.cameras[1]
+    forearm = HAND + np.array([0.0, 0.05, 0.12])
+    pull = (rig, SIGMA_PX, GATE_PX, FLOOR_M, (0.3, 0.3))
+    unlabelled = target(1, forearm, limb=limb, phase=Phase.UNLABELLED, person=0)
+    with_ends = observe(rig, {a.name: [forearm], b.name: [forearm]}, hands_m=HAND)
+    (out,) = pull_hands_onto_blobs((unlabelled,), with_ends, *pull)
+    assert np.linalg.norm(out.mean_m - HAND) < 0.01
+    plain = observe(rig, {a.name: [forearm], b.name: [forearm]})
+    assert pull_hands_onto_blobs((unlabelled,), plain, *pull)[0] is unlabelled
+    head = target(1, forearm, limb=Limb.HEAD, phase=Phase.UNLABELLED, person=0)
+    assert pull_hands_onto_blobs((head,), with_ends, *pull)[0] is head
+
+
 def test_a_blob_nearer_another_target_pulls_nothing(rig):
     """A hand at the face: the face's blob belongs to the head, whose projection is nearer."""
     cam = rig.cameras[0]
