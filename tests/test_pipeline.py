@@ -311,7 +311,9 @@ def test_a_view_where_people_merged_keeps_blobs_for_as_many_as_the_crowns_count(
 def test_hands_pulled_onto_their_blobs_move_only_the_reported_hands(small_recording):
     """``[tracking] blob_pull_sigma_px``: the reported points of labelled hands move (onto
     their blobs' lines of sight, tests/tracking/test_blob_pull.py); the trackers (ids,
-    labels, phases) and the heads stay the filter's. Whether the moves bring the hands
+    labels, phases), the heads and combined pairs stay the filter's, and an unlabelled
+    tracker moves only in a frame set where some blob is a bare forearm (its hand end pulls
+    it). Whether the moves bring the hands
     nearer the true ones is measured on the bundled 640x480 takes, where 67 % of the demo's
     do (docs/tracking.md, "Hands pulled onto their blobs"): this 3 s, 320x240 take has too
     few moves (about 70) to tell, and its mean hand error went either way with changes
@@ -329,7 +331,13 @@ def test_hands_pulled_onto_their_blobs_move_only_the_reported_hands(small_record
         assert [(t.target_id, t.label, t.phase) for t in a.track.targets] == [
             (t.target_id, t.label, t.phase) for t in b.track.targets
         ]
+        forearm = any(
+            o.blobs.hand_px is not None and (o.blobs.hand_px != o.blobs.centroids_px).any()
+            for o in b.observations.values()
+        )
         for s, p in zip(a.track.targets, b.track.targets, strict=True):
+            if s.phase is Phase.UNLABELLED and s.limb is not Limb.HEAD and forearm:
+                continue
             if s.limb is Limb.HEAD or s.phase is not Phase.NORMAL:
                 np.testing.assert_array_equal(s.mean_m, p.mean_m)
             else:
