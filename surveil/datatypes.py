@@ -437,8 +437,9 @@ class BlobSet:
         off
     hand_px : (B, 2) float64 or None -- where the pull of reported hand points
         (:mod:`surveil.tracking.blob_pull`) takes each blob's hand to be: the hand end of a
-        blob taken for a bare forearm, the centroid of any other; None when the blob stage
-        does not keep them apart (``BlobConfig.arm_hand_end`` 'report' only): the centroid
+        blob taken for a bare forearm, the centroid of any other. Kept only with
+        ``BlobConfig.arm_hand_end = 'report'``; None otherwise (the pull then uses
+        ``centroids_px``)
     """
 
     centroids_px: np.ndarray
