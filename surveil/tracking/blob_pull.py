@@ -42,9 +42,11 @@ def blob_evidence(
     A view contributes to point i when the blob centroid nearest i's projection lies within
     ``gate_px`` of it and i's projection is, of all ``points_m``, the nearest to that blob
     (mutual nearest: a blob between two targets, a hand at the face, serves neither). The
-    line of sight goes through the blob's centroid, or, given ``hand_end_sigma_px``, through
-    its ``BlobSet.hand_px`` where the blob stage kept them: a bare forearm is matched by its
-    centroid, which the tracker follows, and its hand end's line pulls towards the hand.
+    line of sight goes through the blob's centroid, or its ``BlobSet.core_px`` where the
+    blob stage kept them (a sleeve's colour fringe left out), or, given
+    ``hand_end_sigma_px``, through its ``BlobSet.hand_px`` where it is a bare forearm: a
+    forearm is matched by its centroid, which the tracker follows, and its hand end's line
+    pulls towards the hand.
 
     Parameters
     ----------
@@ -91,10 +93,12 @@ def blob_evidence(
             continue
         idx = np.flatnonzero(ok)
         through = obs.blobs.centroids_px[best[idx]]
+        if obs.blobs.core_px is not None:
+            through = obs.blobs.core_px[best[idx]]
         moved = np.zeros(len(idx), bool)
         if hand_end_sigma_px is not None and obs.blobs.hand_px is not None:
             ends = obs.blobs.hand_px[best[idx]]
-            moved = (ends != through).any(axis=1)
+            moved = (ends != obs.blobs.centroids_px[best[idx]]).any(axis=1)
             through = np.where(moved[:, None], ends, through)
             n_ends[idx[moved]] += 1
         lines.append((cam, idx, through, depth[idx], moved))
