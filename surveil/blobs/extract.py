@@ -608,6 +608,7 @@ def extract_blobs(
         None if bgr is None else bgr[region],
         _open_radius_px(cfg, skin.shape[1]),
         None if scenery is None else scenery[region],
+        cfg.core_inset_px * skin.shape[1] / REFERENCE_WIDTH_PX,
     )
     labels = np.zeros(skin.shape, np.int32)
     labels[region] = crop.labels
@@ -660,9 +661,10 @@ def _extract(
     bgr: np.ndarray | None,
     radius_px: int,
     scenery: np.ndarray | None = None,
+    core_inset_px: float = 0.0,
 ) -> BlobSet:
-    """:func:`extract_blobs` on one region (``radius_px``: the opening's, from the frame's
-    width)."""
+    """:func:`extract_blobs` on one region (``radius_px``: the opening's, and
+    ``core_inset_px``: the cores', both scaled from the frame's width)."""
     shape = skin.shape
     sil = silhouettes.labels
     if cfg.silhouette_dilate_px > 0 and silhouettes.n:
@@ -809,9 +811,8 @@ def _extract(
     out_labels[comp] = np.arange(1, len(comp) + 1, dtype=np.int32)
     kept_labels = np.take(out_labels, labels)
     core_px = None
-    if cfg.core_inset_px > 0:
-        inset = cfg.core_inset_px * shape[1] / REFERENCE_WIDTH_PX
-        core_px = core_points(kept_labels, stats[comp, :4], cents, inset)
+    if core_inset_px > 0:
+        core_px = core_points(kept_labels, stats[comp, :4], cents, core_inset_px)
     return BlobSet(
         cents,
         areas[order],
