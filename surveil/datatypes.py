@@ -440,11 +440,6 @@ class BlobSet:
         blob taken for a bare forearm, the centroid of any other. Kept only with
         ``BlobConfig.arm_hand_end = 'report'``; None otherwise (the pull then uses
         ``centroids_px``)
-    core_px : (B, 2) float64 or None -- the centre of mass of each blob's pixels at least
-        ``BlobConfig.core_inset_px`` inside it (its centroid where that core is too small):
-        the point the pull of reported hands takes for a blob that is not a forearm (a
-        skin-coloured fringe along a sleeve's edge is thin and falls outside the core).
-        None when the setting is off
     """
 
     centroids_px: np.ndarray
@@ -456,7 +451,6 @@ class BlobSet:
     foreground_share: np.ndarray | None = None
     restored: np.ndarray | None = None
     hand_px: np.ndarray | None = None
-    core_px: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = len(self.centroids_px)
@@ -483,9 +477,6 @@ class BlobSet:
         if self.hand_px is not None:
             require_shape("hand_px", self.hand_px, (n, 2), np.floating)
             readonly(self.hand_px)
-        if self.core_px is not None:
-            require_shape("core_px", self.core_px, (n, 2), np.floating)
-            readonly(self.core_px)
 
     def __len__(self) -> int:
         return len(self.centroids_px)

@@ -37,7 +37,6 @@ KNEE_REL = 0.8
 # there it is a forearm raised beside the head
 HEAD_HALF_WIDTH_REL = 0.07
 LIMBS_PER_PERSON = 3  # a head and two hands: blobs the opening erased only fill these
-CORE_MIN_PX = 8  # a blob's core (BlobConfig.core_inset_px) smaller than this: its centroid
 MIN_OUTLINE_PX = 5  # fewer outline pixels than this: no verdict, the blob is kept
 
 
@@ -466,67 +465,6 @@ def hand_ends(
     return out
 
 
-def core_points(
-    labels: np.ndarray, boxes_px: np.ndarray, centroids_px: np.ndarray, inset_px: float
-) -> np.ndarray:
-    """Each blob's core point: the centre of mass of its pixels at least ``inset_px`` from
-    the nearest pixel outside it, or its centroid where fewer than ``CORE_MIN_PX`` pixels
-    are that deep (a small or thin blob has no core worth the name).
-
-    A skin-coloured fringe of JPEG's half-resolution chroma along a sleeve's edge, 2-3 px
-    wide, joins the hand's blob and drags its centre of mass up the arm (docs/blobs.md,
-    "Fringes and the reported hands"); an inset of 3 px (the blob's two outer rings left
-    out) leaves out a fringe up to 4 px wide and keeps the middle of the hand. One distance
-    transform over the box holding every blob, moments by
-    ``np.bincount``.
-
-    Parameters
-    ----------
-    labels : (H, W) int -- 0 none, i + 1 for blob i
-    boxes_px : (B, 4) int -- x, y, width, height of each blob
-    centroids_px : (B, 2) float64 -- their centres of mass
-    inset_px : float -- how deep a pixel must lie, px (a pixel next to the outside is 1 deep)
-
-    Returns
-    -------
-    (B, 2) float64 -- the points, (u, v)
-
-    >>> lab = np.zeros((16, 12), np.int32)
-    >>> lab[2:9, 2:9] = 1; lab[9:15, 5] = 1  # a 7 x 7 square, a 1 px strip hanging from it
-    >>> ys, xs = np.nonzero(lab); c = np.array([[xs.mean(), ys.mean()]])
-    >>> c.round(2).tolist(), core_points(lab, np.array([[2, 2, 7, 13]]), c, 3.0).tolist()
-    ([[5.0, 5.71]], [[5.0, 5.0]])
-    """
-    n = len(centroids_px)
-    out = centroids_px.copy()
-    if n == 0:
-        return out
-    x0, y0 = int(boxes_px[:, 0].min()), int(boxes_px[:, 1].min())
-    x1 = int((boxes_px[:, 0] + boxes_px[:, 2]).max())
-    y1 = int((boxes_px[:, 1] + boxes_px[:, 3]).max())
-    # a one-pixel rim of background, so that a blob on the box's edge is measured to it
-    crop = np.pad(labels[y0:y1, x0:x1], 1)
-    # blobs are 8-connected components, so no two touch: the distance to the nearest pixel
-    # of none is the distance to the outside of the pixel's own blob
-    # the 5 x 5 mask: its distances are exact at whole pixels along rows and columns (the
-    # 3 x 3 one makes a blob's second ring 1.9 px deep, not 2)
-    depth = cv2.distanceTransform((crop > 0).view(np.uint8), cv2.DIST_L2, 5)
-    ys, xs = np.nonzero(depth >= inset_px)
-    if len(ys) == 0:
-        return out
-    blob = crop[ys, xs] - 1
-    count = np.bincount(blob, minlength=n)
-    ok = count >= CORE_MIN_PX
-    if not ok.any():
-        return out
-    safe = np.maximum(count, 1)
-    u = np.bincount(blob, xs.astype(np.float64), n) / safe + (x0 - 1)
-    v = np.bincount(blob, ys.astype(np.float64), n) / safe + (y0 - 1)
-    out[ok, 0] = u[ok]
-    out[ok, 1] = v[ok]
-    return out
-
-
 class SceneryMask:
     """Skin-coloured scenery of one camera: its background model's background image
     classified by the camera's skin model (``BlobConfig.scenery_share``). Classified again
@@ -608,7 +546,6 @@ def extract_blobs(
         None if bgr is None else bgr[region],
         _open_radius_px(cfg, skin.shape[1]),
         None if scenery is None else scenery[region],
-        cfg.core_inset_px * skin.shape[1] / REFERENCE_WIDTH_PX,
     )
     labels = np.zeros(skin.shape, np.int32)
     labels[region] = crop.labels
@@ -624,7 +561,6 @@ def extract_blobs(
         crop.foreground_share,
         crop.restored,
         None if crop.hand_px is None else crop.hand_px + shift,
-        None if crop.core_px is None else crop.core_px + shift,
     )
 
 
@@ -661,10 +597,9 @@ def _extract(
     bgr: np.ndarray | None,
     radius_px: int,
     scenery: np.ndarray | None = None,
-    core_inset_px: float = 0.0,
 ) -> BlobSet:
-    """:func:`extract_blobs` on one region (``radius_px``: the opening's, and
-    ``core_inset_px``: the cores', both scaled from the frame's width)."""
+    """:func:`extract_blobs` on one region (``radius_px``: the opening's, from the frame's
+    width)."""
     shape = skin.shape
     sil = silhouettes.labels
     if cfg.silhouette_dilate_px > 0 and silhouettes.n:
@@ -809,21 +744,16 @@ def _extract(
     rel_v = _relative_v(cents[:, 1], sil_of, silhouettes)
     out_labels = np.zeros(n_all, np.int32)
     out_labels[comp] = np.arange(1, len(comp) + 1, dtype=np.int32)
-    kept_labels = np.take(out_labels, labels)
-    core_px = None
-    if core_inset_px > 0:
-        core_px = core_points(kept_labels, stats[comp, :4], cents, core_inset_px)
     return BlobSet(
         cents,
         areas[order],
         stats[comp, :4].astype(np.int32),
         sil_of,
         rel_v,
-        kept_labels,
+        np.take(out_labels, labels),
         None if shares is None else shares[comp],
         None if restored_comp is None else restored_comp[comp],
         hand_px,
-        core_px,
     )
 
 

@@ -297,17 +297,6 @@ class BlobConfig:
         "the option before session 101); docs/blobs.md, 'Bare forearms'",
         choices=("point", "report"),
     )
-    core_inset_px: float = setting(
-        0.0,
-        "the blob point that pulls the tracker's reported hands (BlobSet.core_px, "
-        "tracking.blob_pull_*) is the centre of mass of the blob's pixels at least this far "
-        "inside it (a distance transform; pixels of a 640-pixel-wide frame): JPEG's "
-        "half-resolution chroma leaves a 2-3 px skin-coloured fringe along the edges of a "
-        "red or olive sleeve, which joins the hand's blob and lifts its centre of mass; a "
-        "blob whose core has fewer than 8 pixels keeps its centre of mass "
-        "(0 = off: the centres of mass); docs/blobs.md, 'Fringes and the reported hands', px",
-        min=0.0,
-    )
     hand_length_rel: float = setting(
         0.11,
         "... the hand end: the centre of mass of the blob's last this much (times the "

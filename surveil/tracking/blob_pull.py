@@ -36,19 +36,15 @@ def blob_evidence(
     gate_px: float,
     hand_end_sigma_px: tuple[float, float] | None = None,
     ends_only: np.ndarray | None = None,
-    cores: bool = False,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The lines of sight of the blobs at each pulled point's projection, as quadratic terms.
 
     A view contributes to point i when the blob centroid nearest i's projection lies within
     ``gate_px`` of it and i's projection is, of all ``points_m``, the nearest to that blob
     (mutual nearest: a blob between two targets, a hand at the face, serves neither). The
-    line of sight goes through the blob's centroid, or, given ``cores``, its
-    ``BlobSet.core_px`` where the blob stage kept them (a sleeve's colour fringe left out);
-    given
-    ``hand_end_sigma_px``, through its ``BlobSet.hand_px`` where it is a bare forearm: a
-    forearm is matched by its centroid, which the tracker follows, and its hand end's line
-    pulls towards the hand.
+    line of sight goes through the blob's centroid, or, given ``hand_end_sigma_px``, through
+    its ``BlobSet.hand_px`` where the blob stage kept them: a bare forearm is matched by its
+    centroid, which the tracker follows, and its hand end's line pulls towards the hand.
 
     Parameters
     ----------
@@ -62,8 +58,6 @@ def blob_evidence(
         through the centroid
     ends_only : (A,) bool, optional -- points that take evidence only when a hand end is
         among their views (an unlabelled tracker: a bare forearm says it is at a hand)
-    cores : lines through the blobs' cores where they have them (the reported hands), not
-        their centroids (the points fed to the filter)
 
     Returns
     -------
@@ -97,12 +91,10 @@ def blob_evidence(
             continue
         idx = np.flatnonzero(ok)
         through = obs.blobs.centroids_px[best[idx]]
-        if cores and obs.blobs.core_px is not None:
-            through = obs.blobs.core_px[best[idx]]
         moved = np.zeros(len(idx), bool)
         if hand_end_sigma_px is not None and obs.blobs.hand_px is not None:
             ends = obs.blobs.hand_px[best[idx]]
-            moved = (ends != obs.blobs.centroids_px[best[idx]]).any(axis=1)
+            moved = (ends != through).any(axis=1)
             through = np.where(moved[:, None], ends, through)
             n_ends[idx[moved]] += 1
         lines.append((cam, idx, through, depth[idx], moved))
@@ -137,8 +129,7 @@ def pull_hands_onto_blobs(
 ) -> tuple[TargetSnapshot, ...]:
     """``targets`` with each labelled hand in the normal phase moved to the most probable
     point given its estimate (prior: ``cov_m2`` + ``prior_floor_m``^2 I) and the blobs at its
-    projection (:func:`blob_evidence`; through the blobs' cores where the blob stage kept
-    them). Given ``hand_end_sigma_px``, (agreed, lone) pixels, a
+    projection (:func:`blob_evidence`). Given ``hand_end_sigma_px``, (agreed, lone) pixels, a
     bare forearm's line goes through its hand end, and an unlabelled tracker that is not a
     head is pulled too where one of its views is such a forearm (its labels are pending, the
     hand end says where a hand is). Other targets, and hands no blob shows, unchanged."""
@@ -166,7 +157,6 @@ def pull_hands_onto_blobs(
         gate_px,
         hand_end_sigma_px,
         unlabelled,
-        cores=True,
     )
     out = list(targets)
     for k in np.flatnonzero(n_views):

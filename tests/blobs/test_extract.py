@@ -246,29 +246,6 @@ def test_hand_ends_for_the_report_only_leave_the_blobs_points_as_they_were():
     np.testing.assert_array_equal(report.hand_px[[0, 2]], off.centroids_px[[0, 2]])
 
 
-def test_a_blobs_core_leaves_out_a_thin_fringe_and_the_blob_stays_as_it_was():
-    """``core_inset_px``: a hand's blob with a 2 px fringe running up from it (JPEG's
-    chroma along a sleeve's edge) gets a core point at the hand's middle, while its centroid
-    (what the candidates and the tracker see) keeps the fringe; a blob too thin or small
-    for a core keeps its centroid as its core point. The inset is given for 640-pixel-wide
-    frames: this frame is 120 wide, so 16 px here is 3 px there."""
-    sil = _one_person()
-    skin = np.zeros((H, W), bool)
-    skin[50:70, 60:72] = True  # the hand: 20 x 12 px, middle (65.5, 59.5)
-    skin[30:50, 60:62] = True  # a 2 px fringe up its left edge
-    skin[30:50, 30:32] = True  # a fringe on its own
-    plain = dataclasses.replace(BARE_ARMS, arm_length_rel=0.0)
-    cored = dataclasses.replace(plain, core_inset_px=16.0)
-    assert extract_blobs(skin, sil, plain).core_px is None
-    blobs = extract_blobs(skin, sil, cored)
-    hand, fringe = blobs.centroids_px
-    np.testing.assert_array_equal(blobs.centroids_px, extract_blobs(skin, sil, plain).centroids_px)
-    assert hand[1] < 59.5 - 2.5  # the fringe drags the centroid up
-    # rows 52..67 and columns 62..69 are 3 px or more inside: the core's middle
-    assert blobs.core_px[0] == pytest.approx([65.5, 59.5])
-    np.testing.assert_array_equal(blobs.core_px[1], fringe)
-
-
 def test_arm_zone_keeps_a_neck_and_a_shin_at_their_centres_and_still_moves_real_arms():
     """Seen from the side or behind, an ear or a face with its neck is a strip as long and
     thin as a forearm, and so is a shin in skin-coloured trousers; without ``arm_zone`` both

@@ -21,16 +21,11 @@ SIGMA_PX, GATE_PX, FLOOR_M = 2.0, 25.0, 0.05
 
 
 def observe(
-    rig,
-    blobs_m: dict[str, list[np.ndarray]],
-    hands_m: np.ndarray | None = None,
-    ends_in=None,
-    cores_m: np.ndarray | None = None,
+    rig, blobs_m: dict[str, list[np.ndarray]], hands_m: np.ndarray | None = None, ends_in=None
 ) -> dict[str, CameraObservation]:
     """Observations whose only blobs sit at the projections of ``blobs_m[camera]``; with
     ``hands_m`` every blob's ``hand_px`` (in the cameras named in ``ends_in``, default all)
-    is that point's projection (a bare forearm whose hand end is there); with ``cores_m``
-    every blob's ``core_px`` is that point's projection."""
+    is that point's projection (a bare forearm whose hand end is there)."""
     out = {}
     for cam in rig.cameras:
         h, w = cam.height, cam.width
@@ -40,9 +35,6 @@ def observe(
         hand_px = None
         if hands_m is not None and (ends_in is None or cam.name in ends_in):
             hand_px = np.repeat(cam.project(hands_m[None])[0], n, axis=0).astype(np.float64)
-        core_px = None
-        if cores_m is not None:
-            core_px = np.repeat(cam.project(cores_m[None])[0], n, axis=0).astype(np.float64)
         blobs = BlobSet(
             px.astype(np.float64),
             np.full(n, 40, np.int64),
@@ -51,7 +43,6 @@ def observe(
             np.full(n, 0.5),
             np.zeros((h, w), np.int32),
             hand_px=hand_px,
-            core_px=core_px,
         )
         sil = Silhouettes(
             np.zeros((h, w), np.int32),
@@ -139,28 +130,6 @@ def test_a_bare_forearms_hand_end_pulls_the_reported_hand_its_centroid_the_track
     to_forearm = line_distance_m(a, points[0], forearm)
     assert to_forearm < 0.5 * line_distance_m(a, estimate, forearm)
     assert to_forearm < 0.5 * line_distance_m(a, points[0], HAND)
-
-
-def test_blob_cores_pull_the_reported_hand_and_not_the_points_fed_to_the_filter(rig):
-    """``BlobSet.core_px`` (a sleeve's fringe left out of the blob's point): the reported
-    hand is pulled along the lines through the cores, at the blobs' usual error; the
-    one-view points the tracker is fed keep the centroids."""
-    a, b = rig.cameras[0], rig.cameras[1]
-    fringed = HAND + np.array([0.0, 0.0, 0.03])  # the centroid, lifted by the fringe
-    seen = observe(rig, {a.name: [fringed], b.name: [fringed]}, cores_m=HAND)
-    sharp = (rig, 0.3, GATE_PX, FLOOR_M)
-    out = pull_hands_onto_blobs((target(1, fringed),), seen, *sharp)
-    assert np.linalg.norm(out[0].mean_m - HAND) < 0.005
-    plain = observe(rig, {a.name: [fringed], b.name: [fringed]})
-    out = pull_hands_onto_blobs((target(1, HAND),), plain, *sharp)
-    assert np.linalg.norm(out[0].mean_m - fringed) < 0.005
-    one_view = observe(rig, {a.name: [fringed]}, cores_m=HAND)
-    estimate = fringed + sideways(a, 0.05)
-    points, _ = one_view_hand_points(
-        (target(1, estimate),), np.zeros((0, 3)), one_view, *sharp, 0.15
-    )
-    assert line_distance_m(a, points[0], fringed) < 0.002
-    assert line_distance_m(a, points[0], HAND) > 0.01
 
 
 @pytest.mark.parametrize("limb", [Limb.UNKNOWN, Limb.LEFT_HAND])
