@@ -49,7 +49,6 @@ from surveil.recon.crowns import people_from_crowns, silhouette_crowns
 from surveil.recon.settings import CandidateConfig
 from surveil.tracking import MultiTargetTracker, TrackingConfig
 from surveil.tracking.blob_pull import one_view_hand_points, pull_hands_onto_blobs
-from surveil.tracking.contact import spread_combined
 
 log = logging.getLogger(__name__)
 
@@ -398,13 +397,6 @@ class Pipeline:
                     tcfg.blob_pull_gate_px,
                     tcfg.blob_pull_floor_m,
                     (tcfg.blob_pull_hand_end_sigma_px, tcfg.blob_pull_lone_hand_end_sigma_px),
-                ),
-            )
-        if tcfg.combined_gap_m > 0:
-            track = dataclasses.replace(
-                track,
-                targets=spread_combined(
-                    track.targets, self.tracker.combined_sides(), tcfg.combined_gap_m
                 ),
             )
         t2 = time.perf_counter()

@@ -2770,17 +2770,6 @@ class MultiTargetTracker:
         dt_s = max(self._step_s(int(t_ns)), 0.0)
         return tuple(self._snapshot(tid, tr, dt_s) for tid, tr in sorted(self._tracks.items()))
 
-    def combined_sides(self) -> dict[int, np.ndarray]:
-        """Tracker id -> (3,) its pair's "before" vector (section 7.1: towards its partner,
-        where the two were before joining, m), for every combined tracker that has one:
-        which side of the pair each target is on (:func:`surveil.tracking.contact.
-        spread_combined`)."""
-        return {
-            tid: tr.before_vec_m.copy()
-            for tid, tr in self._tracks.items()
-            if tr.phase is Phase.COMBINED and tr.before_vec_m is not None
-        }
-
     def _expected_hand_tracks(self) -> list[_Track]:
         """The trackers :meth:`expected_hands` reports, in its order."""
         limit = self.cfg.lifecycle.rescue_max_frames

@@ -727,15 +727,6 @@ class TrackingConfig:
         "the pull, m",
         min=0.001,
     )
-    combined_gap_m: float = setting(
-        0.05,
-        "the two reported points of a combined pair lie this far apart, each on its own side "
-        "of the pair's estimate as before they joined: two hands in contact are about a "
-        "hand's thickness apart, not at one point (0 = both at the pair's estimate); "
-        "docs/tracking.md, 'A combined pair's two points', m",
-        min=0.0,
-        max=0.3,
-    )
     head_centre_rise_m: float = setting(
         0.04,
         "a head target's reported position is its skin point raised by this much where the "

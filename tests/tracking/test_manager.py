@@ -22,7 +22,6 @@ from surveil.tracking import (
     MultiTargetTracker,
     TrackingConfig,
 )
-from surveil.tracking.contact import spread_combined
 
 DT_NS = 66_666_667  # 15 fps
 
@@ -388,31 +387,6 @@ def test_join_and_separate_follow_the_angle_rule(rig, rng, cross):
     assert np.linalg.norm(final["p1/right_hand"] - p["right_hand"]) < 0.04
     true_left_final = sides[-1][0]
     assert bool(np.linalg.norm(final["p1/left_hand"] - true_left_final) < 0.04) is (not cross)
-
-
-def test_a_combined_pair_knows_which_side_each_of_its_targets_came_from(rig, rng):
-    """While the clap's hands are combined, each tracker's side points at its partner as
-    they were before joining (the person's right hand is to its left hand's right), and
-    the two reported points, spread by the contact gap, lie each on its own hand's side."""
-    frames, sides, p = clap_frames(cross=False)
-    trk = MultiTargetTracker(LONE, rig, seed=6)
-    seen = 0
-    for i, pts in enumerate(frames):
-        out = trk.step(i * DT_NS, candidates(pts, rng))
-        combined = {s.label: s for s in out.targets if s.phase is Phase.COMBINED}
-        if len(combined) < 2:
-            continue
-        seen += 1
-        ids = {label: s.target_id for label, s in combined.items()}
-        found = trk.combined_sides()
-        left, right = found[ids["p1/left_hand"]], found[ids["p1/right_hand"]]
-        # the person faces +y, so its left is -x: the right hand is towards +x of the left
-        assert left @ -p["left"] > 0.15 and right @ p["left"] > 0.15
-        spread = {s.label: s.mean_m for s in spread_combined(out.targets, found, 0.05)}
-        lh, rh = sides[i]
-        assert (spread["p1/right_hand"] - spread["p1/left_hand"]) @ (rh - lh) > 0
-    assert seen >= 5
-    assert trk.combined_sides() == {}  # parted: no pair left
 
 
 def test_joined_hands_stay_combined_through_missing_candidates(rig, rng):
