@@ -529,6 +529,12 @@ class LabellingConfig:
         "than the other; otherwise by the angle rule (0 = angle rule only), m",
         min=0.0,
     )
+    own_hands_by_sides: bool = setting(
+        False,
+        "a combined pair of one person's left and right hands parts by the person's sides "
+        "(the mode farther to the person's left for the left hand, from its facing) where "
+        "the facing tells them apart; otherwise by the angle rule, as the paper has",
+    )
     reach_revise_s: float = setting(
         0.5,
         "a hand out of its person's reach (arm_reach_m + person_margin_m) and within another's "

@@ -389,6 +389,31 @@ def test_join_and_separate_follow_the_angle_rule(rig, rng, cross):
     assert bool(np.linalg.norm(final["p1/left_hand"] - true_left_final) < 0.04) is (not cross)
 
 
+@pytest.mark.parametrize("by_sides", [False, True])
+def test_a_persons_own_hands_part_by_the_persons_sides_not_a_stale_before_vector(
+    rig, rng, by_sides
+):
+    """The clap's pair, its angle rule's "before" vector reversed while it is combined (as
+    when it was last measured with the hands crossed): the paper's angle rule then parts the
+    labels onto the wrong sides; with ``own_hands_by_sides`` the person's facing decides, and
+    each label ends on its own side."""
+    frames, _, p = clap_frames(cross=False)
+    labelling = dataclasses.replace(LONE.labelling, own_hands_by_sides=by_sides)
+    trk = MultiTargetTracker(dataclasses.replace(LONE, labelling=labelling), rig, seed=6)
+    reversed_once: set[int] = set()
+    for i, pts in enumerate(frames):
+        out = trk.step(i * DT_NS, candidates(pts, rng))
+        for tr in trk._tracks.values():
+            if tr.phase is Phase.COMBINED and tr.id not in reversed_once:
+                tr.before_vec_m = -tr.before_vec_m
+                reversed_once.add(tr.id)
+    assert len(reversed_once) == 2
+    final = by_label(out)
+    left_home = bool(np.linalg.norm(final["p1/left_hand"] - p["left_hand"]) < 0.04)
+    right_home = bool(np.linalg.norm(final["p1/right_hand"] - p["right_hand"]) < 0.04)
+    assert left_home is by_sides and right_home is by_sides
+
+
 def test_joined_hands_stay_combined_through_missing_candidates(rig, rng):
     """Hands that met head-on keep opposite velocities in their particles; frames without any
     candidate while they are together must not split the pair (the split comes only when two
