@@ -530,10 +530,11 @@ class LabellingConfig:
         min=0.0,
     )
     own_hands_by_sides: bool = setting(
-        False,
+        True,
         "a combined pair of one person's left and right hands parts by the person's sides "
         "(the mode farther to the person's left for the left hand, from its facing) where "
-        "the facing tells them apart; otherwise by the angle rule, as the paper has",
+        "the facing tells them apart; otherwise, and with false, by the paper's angle rule "
+        "(docs/tracking.md, 'combined -> unlabelled')",
     )
     reach_revise_s: float = setting(
         0.5,
