@@ -2572,8 +2572,10 @@ class MultiTargetTracker:
     def _separate(self, a: _Track, b: _Track, t_ns: int, met: bool = True) -> None:
         """Give a and b each a mode of the separating pair and restart them there: two people's
         hands by their owners when that is clear (:func:`lab.owner_rule`, ``owner_margin_m``),
-        otherwise by the angle rule (section 7.1); a pair that never met (:meth:`_never_met`)
-        by where each tracker was at the join."""
+        one person's left and right hands by its sides where its facing tells them apart
+        (:meth:`_mode_sides`, ``own_hands_by_sides``; the angle rule's "before" vector can be
+        stale), otherwise by the angle rule (section 7.1); a pair that never met
+        (:meth:`_never_met`) by where each tracker was at the join."""
         modes, vel = a.split_m, a.split_vel_mps
         if modes is None or vel is None:
             return
