@@ -2595,11 +2595,6 @@ class MultiTargetTracker:
             if met and heads is not None and margin > 0
             else None
         )
-        by_sides = (
-            self._mode_sides(a, b, modes)
-            if met and self.cfg.labelling.own_hands_by_sides
-            else None
-        )
         if a.split_fixed is not None and b.split_fixed is not None:
             mode_a, mode_b = a.split_fixed, b.split_fixed
             log.debug("t%d / t%d separate as their parting decided", a.id, b.id)
@@ -2609,7 +2604,7 @@ class MultiTargetTracker:
         elif by_owner is not None:
             (mode_a, mode_b), gain = by_owner
             log.debug("t%d / t%d separate by their owners (%.2f m shorter)", a.id, b.id, gain)
-        elif by_sides is not None:
+        elif self.cfg.labelling.own_hands_by_sides and (by_sides := self._mode_sides(a, b, modes)):
             mode_a, mode_b = by_sides
             log.debug("t%d / t%d separate by their person's sides", a.id, b.id)
         else:
